@@ -1,0 +1,56 @@
+// Micro-benchmarks of the merge's kernels (Google Benchmark; --benchmark_format=json).
+// The end-to-end figures come from `csculpt bench merge`.
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <vector>
+
+#include "csculpt/generate.h"
+#include "csculpt/hierarchy.h"
+#include "csculpt/isometry.h"
+
+namespace {
+
+using namespace csculpt;
+
+std::vector<std::array<double, 9>> near_rotations(std::size_t n) {
+  std::vector<std::array<double, 9>> out(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double a = 0.001 * static_cast<double>(i % 997), s = 1.0 + 0.0001 * static_cast<double>(i % 101);
+    out[i] = {s * std::cos(a), -std::sin(a), 0.01, std::sin(a), std::cos(a), 0.0, 0.0, 0.02, 1.0 / s};
+  }
+  return out;
+}
+
+void BM_ClosestRotationNewton(benchmark::State& state) {
+  const auto m = near_rotations(4096);
+  std::size_t i = 0;
+  Quat q;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(closest_rotation(m[i++ & 4095].data(), q));
+    benchmark::DoNotOptimize(q);
+  }
+}
+BENCHMARK(BM_ClosestRotationNewton);
+
+void BM_ClosestRotationSvd(benchmark::State& state) {
+  const auto m = near_rotations(4096);
+  std::size_t i = 0;
+  Quat q;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(closest_rotation_svd(m[i++ & 4095].data(), q));
+    benchmark::DoNotOptimize(q);
+  }
+}
+BENCHMARK(BM_ClosestRotationSvd);
+
+void BM_HierarchyBuild(benchmark::State& state) {
+  const Mesh mesh = make_sphere(static_cast<std::uint32_t>(state.range(0)));
+  for (auto _ : state) benchmark::DoNotOptimize(Hierarchy::build(mesh));
+  state.counters["faces"] = static_cast<double>(mesh.face_count());
+}
+BENCHMARK(BM_HierarchyBuild)->Arg(20000)->Arg(320000)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();

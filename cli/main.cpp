@@ -1,0 +1,137 @@
+// csculpt: command-line front end of the SDK (merge, hierarchy, diff, bench).
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cstdio>
+#include <exception>
+#include <string>
+#include <vector>
+
+#include "bench_merge.h"
+#include "csculpt/diff.h"
+#include "csculpt/error.h"
+#include "csculpt/hierarchy.h"
+#include "csculpt/io.h"
+#include "csculpt/merge.h"
+
+namespace {
+
+using namespace csculpt;
+
+int run_merge(const std::string& base_path, const std::vector<std::string>& edit_paths,
+              const std::string& out, const std::string& method_name, std::uint32_t k) {
+  const MergeMethod method = merge_method_from_string(method_name);
+  const Mesh base = read_mesh(base_path);
+  std::vector<Diff> diffs;
+  for (const std::string& path : edit_paths) {
+    const Mesh edit = read_mesh(path);
+    try {
+      diffs.push_back(capture_diff(base, edit));
+    } catch (const InvalidInput& e) {
+      throw InvalidInput(path + ": " + e.what() + " (compared with " + base_path + ")");
+    }
+  }
+  HierarchyOptions options;
+  options.max_parents = k;
+  const Hierarchy hierarchy = Hierarchy::build(base, options);
+  Merger merger(hierarchy);
+  const auto t0 = std::chrono::steady_clock::now();
+  const Diff merged = merger.merge(base, diffs, method);
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  Mesh result = base;
+  apply_diff(merged, result);
+  write_mesh(result, out);
+  std::fprintf(stderr, "merged %zu edits of %zu vertices with %s in %.2f ms -> %s\n",
+               diffs.size(), base.vertex_count(), std::string(to_string(method)).c_str(), ms,
+               out.c_str());
+  return 0;
+}
+
+int run_hierarchy(const std::string& path, std::uint32_t k) {
+  const Mesh mesh = read_mesh(path);
+  HierarchyOptions options;
+  options.max_parents = k;
+  const auto t0 = std::chrono::steady_clock::now();
+  const Hierarchy h = Hierarchy::build(mesh, options);
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  std::string json = to_json(h.stats());
+  json.pop_back();
+  std::printf("%s,\"k\":%u,\"build_ms\":%.3f,\"digest\":\"%016llx\"}\n", json.c_str(), k, ms,
+              static_cast<unsigned long long>(h.digest()));
+  return 0;
+}
+
+int run_diff(const std::string& base_path, const std::string& edited_path) {
+  const Mesh base = read_mesh(base_path);
+  const Mesh edited = read_mesh(edited_path);
+  Diff d;
+  try {
+    d = capture_diff(base, edited);
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(edited_path + ": " + e.what() + " (compared with " + base_path + ")");
+  }
+  std::printf("%s\n", to_json(diff_stats(d, base)).c_str());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"cSculpt: merge concurrent sculpting and painting edits of one mesh"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "csculpt 0.1.0");
+
+  std::string base, out, method = "full", edited;
+  std::vector<std::string> edits;
+  std::uint32_t k = 7;
+
+  auto* merge = app.add_subcommand("merge", "N-way merge of edits of BASE into OUT");
+  merge->add_option("base", base, "the last agreed mesh")->required()->check(CLI::ExistingFile);
+  merge->add_option("edits", edits, "two or more edited meshes (same connectivity)")
+      ->required()
+      ->expected(2, -1)
+      ->check(CLI::ExistingFile);
+  merge->add_option("-o,--out", out, "merged mesh to write (.ply or .obj)")->required();
+  merge->add_option("--method", method,
+                    "full, single-parent, single-level-isometry, multiscale-translation, "
+                    "weighted-translation, average, sum")
+      ->capture_default_str();
+  merge->add_option("--k", k, "blended parents per node (paper: 7)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 32));
+
+  auto* hierarchy = app.add_subcommand("hierarchy", "hierarchy statistics of MESH (JSON)");
+  std::string mesh_path;
+  hierarchy->add_option("mesh", mesh_path, "mesh file")->required()->check(CLI::ExistingFile);
+  hierarchy->add_option("--k", k, "blended parents per node")->capture_default_str()->check(CLI::Range(1, 32));
+
+  auto* diff = app.add_subcommand("diff", "statistics of the edit from BASE to EDITED (JSON)");
+  diff->add_option("base", base, "base mesh")->required()->check(CLI::ExistingFile);
+  diff->add_option("edited", edited, "edited mesh")->required()->check(CLI::ExistingFile);
+
+  auto* bench = app.add_subcommand("bench", "benchmarks (one JSON object per result)");
+  bench->require_subcommand(1);
+  csculpt::cli::BenchMergeOptions bo;
+  auto* bench_merge = bench->add_subcommand("merge", "merge speed on a built-in sphere");
+  bench_merge->add_option("--faces", bo.faces, "approximate face count")->capture_default_str()->check(CLI::Range(20u, 50000000u));
+  bench_merge->add_option("--users", bo.users, "concurrent edits")->capture_default_str()->check(CLI::Range(1u, 64u));
+  bench_merge->add_option("--method", bo.method, "merge method")->capture_default_str();
+  bench_merge->add_option("--k", bo.k, "blended parents per node")->capture_default_str()->check(CLI::Range(1u, 32u));
+  bench_merge->add_option("--repeat", bo.repeat, "timed repetitions (median reported)")->capture_default_str()->check(CLI::Range(1u, 10000u));
+  bench_merge->add_option("--edited-fraction", bo.edited_fraction, "vertices each user touches")->capture_default_str()->check(CLI::Range(0.0, 1.0));
+  bench_merge->add_flag("--paint", bo.paint, "add material channels and paint strokes");
+  bench_merge->add_option("--seed", bo.seed, "stroke seed")->capture_default_str();
+
+  CLI11_PARSE(app, argc, argv);
+  try {
+    if (*merge) return run_merge(base, edits, out, method, k);
+    if (*hierarchy) return run_hierarchy(mesh_path, k);
+    if (*diff) return run_diff(base, edited);
+    if (*bench_merge) return csculpt::cli::bench_merge(bo);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "csculpt: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

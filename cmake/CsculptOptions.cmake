@@ -1,0 +1,30 @@
+# Project-wide compiler settings: warnings, determinism, sanitizers.
+#
+# CSCULPT_SANITIZE: "" (off), "address" (ASan+UBSan), or "thread" (TSan).
+set(CSCULPT_SANITIZE "" CACHE STRING "Sanitizers: '', 'address' (ASan+UBSan) or 'thread' (TSan)")
+set_property(CACHE CSCULPT_SANITIZE PROPERTY STRINGS "" address thread)
+
+add_library(csculpt_warnings INTERFACE)
+add_library(csculpt::warnings ALIAS csculpt_warnings)
+target_compile_options(csculpt_warnings INTERFACE
+  $<$<COMPILE_LANGUAGE:CXX>:-Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor
+  -Wconversion -Wno-sign-conversion -Wcast-align -Woverloaded-virtual>
+  $<$<COMPILE_LANGUAGE:C>:-Wall -Wextra -Wpedantic>)
+option(CSCULPT_WERROR "Treat warnings as errors" ON)
+if(CSCULPT_WERROR)
+  target_compile_options(csculpt_warnings INTERFACE -Werror)
+endif()
+
+# Determinism: every peer must compute bit-identical merges. No fused multiply-add
+# contraction (its availability differs by CPU), no fast-math, no -march=native.
+add_compile_options(-ffp-contract=off -fno-fast-math)
+
+if(CSCULPT_SANITIZE STREQUAL "address")
+  add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
+  add_link_options(-fsanitize=address,undefined)
+elseif(CSCULPT_SANITIZE STREQUAL "thread")
+  add_compile_options(-fsanitize=thread -fno-omit-frame-pointer)
+  add_link_options(-fsanitize=thread)
+elseif(NOT CSCULPT_SANITIZE STREQUAL "")
+  message(FATAL_ERROR "CSCULPT_SANITIZE must be '', 'address' or 'thread'")
+endif()

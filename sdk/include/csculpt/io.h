@@ -1,0 +1,31 @@
+// Reading and writing mesh files: PLY (ascii and binary, with channels as vertex
+// properties), OBJ, OFF and STL (read).
+#pragma once
+
+#include <string>
+#include <string_view>
+
+#include "csculpt/mesh.h"
+
+namespace csculpt {
+
+/// Reads a triangle mesh; the format is chosen by the file's contents/extension
+/// (.ply .obj .off .stl, case-insensitive). Polygons are fan-triangulated.
+/// PLY vertex properties other than x,y,z become channels: `name` (width 1) or
+/// `name_r/_g/_b/_a` (width 2..4); colour `red/green/blue` becomes albedo.
+/// Throws IoError (cannot open) or InvalidInput (malformed; the message names the file,
+/// the line or element and the problem). Never returns a mesh that fails validate().
+Mesh read_mesh(const std::string& path);
+
+/// Writes .ply (binary little-endian, channels as float properties) or .obj (positions and
+/// faces only). Writes to a temporary file and renames it, so a failure leaves no partial file.
+void write_mesh(const Mesh& mesh, const std::string& path);
+
+/// Parses PLY bytes held in memory (what read_mesh does for .ply); `what` names the source
+/// in error messages. Exposed for fuzzing.
+Mesh parse_ply(std::string_view bytes, std::string_view what);
+Mesh parse_obj(std::string_view bytes, std::string_view what);
+Mesh parse_off(std::string_view bytes, std::string_view what);
+Mesh parse_stl(std::string_view bytes, std::string_view what);
+
+}  // namespace csculpt

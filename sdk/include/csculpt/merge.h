@@ -1,0 +1,94 @@
+// The cSculpt merge (paper §3.1): N concurrent edits of one base mesh become one merged
+// edit. Positions merge as per-vertex isometries (dual quaternions) decomposed over the
+// multiresolution hierarchy, blended per node by magnitude and recomposed coarse to fine;
+// every other channel merges the same way as translations in its linear space.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include "csculpt/diff.h"
+#include "csculpt/hierarchy.h"
+#include "csculpt/mesh.h"
+
+namespace csculpt {
+
+/// The paper's algorithm and the variants it is compared with (Fig. 3, Fig. 5).
+enum class MergeMethod : std::uint32_t {
+  full = 0,                   ///< isometries, multiscale, K blended parents
+  single_parent = 1,          ///< isometries, multiscale, a tree (K = 1)
+  single_level_isometry = 2,  ///< isometries blended per vertex, no hierarchy
+  multiscale_translation = 3, ///< translations, multiscale, K parents (no rotation)
+  weighted_translation = 4,   ///< translations blended per vertex by magnitude (paper eq. 1)
+  average = 5,                ///< mean of the translations
+  sum = 6,                    ///< sum of the translations
+};
+
+std::string_view to_string(MergeMethod method);
+/// "full", "single-parent", ...; throws InvalidInput listing the valid names otherwise.
+MergeMethod merge_method_from_string(std::string_view name);
+std::span<const MergeMethod> all_merge_methods();
+
+/// The working frame: positions are merged in coordinates centred on `center` and divided by
+/// `scale`, so the magnitude that weighs the blend does not depend on the model's units or
+/// placement. Every peer of a session must use the same frame (fit it once on the session's
+/// first mesh); fit() takes the bounding box centre and diagonal.
+struct MergeFrame {
+  Vec3f center{0, 0, 0};
+  float scale = 1;
+  static MergeFrame fit(std::span<const Vec3f> positions);
+};
+
+struct MergeTimings {
+  double isometry_ms = 0;   ///< per-vertex isometries / translations of every diff
+  double decompose_ms = 0;  ///< averages up the hierarchy
+  double blend_ms = 0;      ///< residuals, per-node blend and reconstruction
+  double apply_ms = 0;      ///< writing the merged diff
+  /// Hierarchy nodes the merge visited (every diff's and the merged ones, all levels) and
+  /// an estimate of the bytes it read and wrote for them: the yardstick for `stream_ms`.
+  std::uint64_t nodes_visited = 0;
+  std::uint64_t bytes_touched = 0;
+};
+
+/// Stateful merger: holds the hierarchy and a workspace that is reused across merges, so
+/// repeated merges on one mesh allocate nothing once warm. One merge at a time per Merger
+/// (not thread-safe); separate Mergers may run concurrently.
+///
+/// Order independence: the result depends only on the base and the set of diffs, bit for bit
+/// (diffs are put in a canonical order by content before any arithmetic).
+class Merger {
+ public:
+  /// `hierarchy` must outlive the Merger and describe the base mesh's connectivity.
+  explicit Merger(const Hierarchy& hierarchy);
+  ~Merger();
+  Merger(const Merger&) = delete;
+  Merger& operator=(const Merger&) = delete;
+
+  /// Merges `diffs` (each from `base`) into one diff from `base`. Vertices that no diff
+  /// touches keep their exact base values; the merged diff lists only changed values.
+  /// Throws InvalidInput if a diff does not fit the base.
+  Diff merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod method,
+             const MergeFrame& frame);
+  Diff merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod method = MergeMethod::full) {
+    return merge(base, diffs, method, MergeFrame::fit(base.positions));
+  }
+
+  const MergeTimings& last_timings() const { return timings_; }
+  const Hierarchy& hierarchy() const { return hierarchy_; }
+
+ private:
+  struct Workspace;
+  const Hierarchy& hierarchy_;
+  std::unique_ptr<Workspace> workspace_;
+  MergeTimings timings_;
+};
+
+/// One-shot convenience: builds the hierarchy (K = `max_parents`, 1 for single-parent),
+/// captures each edit's diff, merges, and returns the merged mesh.
+Mesh merge_meshes(const Mesh& base, std::span<const Mesh> edits,
+                  MergeMethod method = MergeMethod::full, std::uint32_t max_parents = 7);
+
+}  // namespace csculpt

@@ -1,0 +1,326 @@
+// Paper §3.1 "Hierarchy Construction": greedy selection of coarse nodes, horizontal links
+// between first parents, parent sets smoothed over neighbours and trimmed to K.
+#include "csculpt/hierarchy.h"
+
+#include <algorithm>
+#include <cstring>
+#include <limits>
+#include <sstream>
+#include <utility>
+
+#include "csculpt/error.h"
+
+namespace csculpt {
+namespace {
+
+constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+
+/// Builds rows from (row, item) pairs already counted: sorts and de-duplicates each row.
+void sort_unique_rows(Csr& csr) {
+  std::uint32_t write = 0;
+  std::uint32_t begin = 0;
+  for (std::size_t r = 0; r + 1 < csr.offsets.size(); ++r) {
+    const std::uint32_t end = csr.offsets[r + 1];
+    auto first = csr.items.begin() + begin;
+    auto last = csr.items.begin() + end;
+    std::sort(first, last);
+    last = std::unique(first, last);
+    csr.offsets[r] = write;
+    for (auto it = first; it != last; ++it) csr.items[write++] = *it;
+    begin = end;
+  }
+  csr.offsets.back() = write;
+  csr.items.resize(write);
+}
+
+/// Prefix sums counts (size rows+1, counts in [1..]) into offsets in place.
+void counts_to_offsets(std::vector<std::uint32_t>& offsets) {
+  for (std::size_t i = 1; i < offsets.size(); ++i) offsets[i] += offsets[i - 1];
+}
+
+std::uint64_t fnv1a(std::uint64_t h, const void* data, std::size_t bytes) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (std::size_t i = 0; i < bytes; ++i) {
+    h ^= p[i];
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+template <class T>
+std::uint64_t fnv1a(std::uint64_t h, const std::vector<T>& v) {
+  return fnv1a(h, v.data(), v.size() * sizeof(T));
+}
+
+struct WeightedParent {
+  std::uint32_t node;
+  float weight;
+};
+
+}  // namespace
+
+Topology Topology::build(std::uint32_t vertex_count, std::span<const Triangle> triangles) {
+  Topology t;
+  t.vertex_count = vertex_count;
+  t.triangles.assign(triangles.begin(), triangles.end());
+  for (std::size_t f = 0; f < triangles.size(); ++f) {
+    for (std::uint32_t v : triangles[f]) {
+      if (v >= vertex_count) {
+        throw InvalidInput("triangle " + std::to_string(f) + " uses vertex " +
+                           std::to_string(v) + " but the mesh has " +
+                           std::to_string(vertex_count) + " vertices");
+      }
+    }
+  }
+  // vertex -> faces (increasing face order by construction)
+  auto& vf = t.vertex_faces;
+  vf.offsets.assign(vertex_count + 1, 0);
+  for (const Triangle& tri : triangles)
+    for (std::uint32_t v : tri) ++vf.offsets[v + 1];
+  counts_to_offsets(vf.offsets);
+  vf.items.resize(vf.offsets.back());
+  {
+    std::vector<std::uint32_t> cursor(vf.offsets.begin(), vf.offsets.end() - 1);
+    for (std::uint32_t f = 0; f < triangles.size(); ++f)
+      for (std::uint32_t v : triangles[f]) vf.items[cursor[v]++] = f;
+  }
+  // vertex -> vertices: two entries per triangle corner, then sort + unique per row
+  auto& vv = t.vertex_vertices;
+  vv.offsets.assign(vertex_count + 1, 0);
+  for (const Triangle& tri : triangles)
+    for (std::uint32_t v : tri) vv.offsets[v + 1] += 2;
+  counts_to_offsets(vv.offsets);
+  vv.items.resize(vv.offsets.back());
+  {
+    std::vector<std::uint32_t> cursor(vv.offsets.begin(), vv.offsets.end() - 1);
+    for (const Triangle& tri : triangles) {
+      for (int c = 0; c < 3; ++c) {
+        const std::uint32_t v = tri[c];
+        vv.items[cursor[v]++] = tri[(c + 1) % 3];
+        vv.items[cursor[v]++] = tri[(c + 2) % 3];
+      }
+    }
+  }
+  sort_unique_rows(vv);
+  // A triangle that repeats a vertex would make it its own neighbour; drop self-links.
+  std::uint32_t write = 0, begin = 0;
+  for (std::uint32_t v = 0; v < vertex_count; ++v) {
+    const std::uint32_t end = vv.offsets[v + 1];
+    vv.offsets[v] = write;
+    for (std::uint32_t i = begin; i < end; ++i)
+      if (vv.items[i] != v) vv.items[write++] = vv.items[i];
+    begin = end;
+  }
+  vv.offsets[vertex_count] = write;
+  vv.items.resize(write);
+  return t;
+}
+
+Hierarchy Hierarchy::build(std::uint32_t vertex_count, std::span<const Triangle> triangles,
+                           const HierarchyOptions& options) {
+  if (options.max_parents < 1 || options.max_parents > 32)
+    throw InvalidInput("hierarchy: K (max parents) must be between 1 and 32, got " +
+                       std::to_string(options.max_parents));
+  Hierarchy h;
+  h.options_ = options;
+  h.stride_ = options.max_parents;
+  h.topology_ = Topology::build(vertex_count, triangles);
+  const std::uint32_t K = options.max_parents;
+
+  Csr adjacency = h.topology_.vertex_vertices;  // horizontal links of the current level
+  HierarchyLevel level0;
+  level0.node_count = vertex_count;
+  level0.representative.resize(vertex_count);
+  for (std::uint32_t v = 0; v < vertex_count; ++v) level0.representative[v] = v;
+  h.levels_.push_back(std::move(level0));
+
+  std::vector<std::uint32_t> new_index;
+  std::vector<std::uint8_t> has_parent;
+  std::vector<std::uint32_t> first_parent;
+  Csr provisional;
+  std::vector<WeightedParent> gather;
+  std::vector<std::uint32_t> selected;
+
+  while (h.levels_.size() < options.max_levels) {
+    HierarchyLevel& fine = h.levels_.back();
+    const std::uint32_t n = fine.node_count;
+
+    // Greedy selection in index order: a node without a parent becomes a coarse node and
+    // the parent of itself and all its neighbours.
+    new_index.assign(n, kNone);
+    has_parent.assign(n, 0);
+    selected.clear();
+    for (std::uint32_t x = 0; x < n; ++x) {
+      if (has_parent[x]) continue;
+      new_index[x] = static_cast<std::uint32_t>(selected.size());
+      selected.push_back(x);
+      has_parent[x] = 1;
+      for (std::uint32_t y : adjacency.row(x)) has_parent[y] = 1;
+    }
+    const auto m = static_cast<std::uint32_t>(selected.size());
+    if (m == n) break;  // one node per connected component: the construction is over
+
+    // Provisional parent sets, sorted by coarse index (= creation order, so the first
+    // entry is the node's first parent).
+    provisional.offsets.assign(n + 1, 0);
+    for (std::uint32_t x = 0; x < n; ++x) {
+      std::uint32_t c = new_index[x] != kNone ? 1 : 0;
+      for (std::uint32_t y : adjacency.row(x)) c += new_index[y] != kNone ? 1 : 0;
+      provisional.offsets[x + 1] = c;
+    }
+    counts_to_offsets(provisional.offsets);
+    provisional.items.resize(provisional.offsets.back());
+    first_parent.resize(n);
+    for (std::uint32_t x = 0; x < n; ++x) {
+      std::uint32_t* out = provisional.items.data() + provisional.offsets[x];
+      std::uint32_t* const row_begin = out;
+      bool self_done = new_index[x] == kNone;
+      for (std::uint32_t y : adjacency.row(x)) {
+        if (!self_done && x < y) {
+          *out++ = new_index[x];
+          self_done = true;
+        }
+        if (new_index[y] != kNone) *out++ = new_index[y];
+      }
+      if (!self_done) *out++ = new_index[x];
+      first_parent[x] = *row_begin;
+    }
+
+    // Horizontal links of the coarse level: between distinct first parents of linked nodes.
+    Csr coarse_adjacency;
+    coarse_adjacency.offsets.assign(m + 1, 0);
+    for (std::uint32_t x = 0; x < n; ++x)
+      for (std::uint32_t y : adjacency.row(x))
+        if (first_parent[y] != first_parent[x]) ++coarse_adjacency.offsets[first_parent[x] + 1];
+    counts_to_offsets(coarse_adjacency.offsets);
+    coarse_adjacency.items.resize(coarse_adjacency.offsets.back());
+    {
+      std::vector<std::uint32_t> cursor(coarse_adjacency.offsets.begin(),
+                                        coarse_adjacency.offsets.end() - 1);
+      for (std::uint32_t x = 0; x < n; ++x)
+        for (std::uint32_t y : adjacency.row(x))
+          if (first_parent[y] != first_parent[x])
+            coarse_adjacency.items[cursor[first_parent[x]]++] = first_parent[y];
+    }
+    sort_unique_rows(coarse_adjacency);
+
+    // Smooth the parent sets over neighbours, trim to the K heaviest, renormalise.
+    fine.parent.assign(std::size_t{n} * K, 0);
+    fine.parent_weight.assign(std::size_t{n} * K, 0.f);
+    fine.parent_count.assign(n, 0);
+    HierarchyLevel coarse;
+    coarse.node_count = m;
+    coarse.child_weight_sum.assign(m, 0.f);
+    coarse.tree_child_count.assign(m, 0.f);
+    coarse.representative.resize(m);
+    for (std::uint32_t c = 0; c < m; ++c) coarse.representative[c] = fine.representative[selected[c]];
+
+    for (std::uint32_t x = 0; x < n; ++x) {
+      gather.clear();
+      auto add_set = [&](std::uint32_t node) {
+        const auto row = provisional.row(node);
+        const float w = 1.f / static_cast<float>(row.size());
+        for (std::uint32_t p : row) gather.push_back({p, w});
+      };
+      add_set(x);
+      for (std::uint32_t y : adjacency.row(x)) add_set(y);
+      std::sort(gather.begin(), gather.end(), [](const WeightedParent& a, const WeightedParent& b) {
+        return a.node != b.node ? a.node < b.node : a.weight < b.weight;
+      });
+      // merge equal parents (union with summed weights)
+      std::size_t unique = 0;
+      for (std::size_t i = 0; i < gather.size(); ++i) {
+        if (unique > 0 && gather[unique - 1].node == gather[i].node)
+          gather[unique - 1].weight += gather[i].weight;
+        else
+          gather[unique++] = gather[i];
+      }
+      gather.resize(unique);
+      // The normalisation to 1 before the trim does not change which K are heaviest, so the
+      // trim and one final normalisation give the paper's weights.
+      const std::size_t keep = std::min<std::size_t>(K, gather.size());
+      std::partial_sort(gather.begin(), gather.begin() + static_cast<std::ptrdiff_t>(keep),
+                        gather.end(), [](const WeightedParent& a, const WeightedParent& b) {
+                          return a.weight != b.weight ? a.weight > b.weight : a.node < b.node;
+                        });
+      float total = 0;
+      for (std::size_t k = 0; k < keep; ++k) total += gather[k].weight;
+      std::uint32_t* parent = fine.parent.data() + std::size_t{x} * K;
+      float* weight = fine.parent_weight.data() + std::size_t{x} * K;
+      for (std::size_t k = 0; k < K; ++k) {
+        if (k < keep) {
+          parent[k] = gather[k].node;
+          weight[k] = gather[k].weight / total;
+          coarse.child_weight_sum[parent[k]] += weight[k];
+        } else {
+          parent[k] = gather[0].node;
+          weight[k] = 0.f;
+        }
+      }
+      fine.parent_count[x] = static_cast<std::uint8_t>(keep);
+      coarse.tree_child_count[parent[0]] += 1.f;
+    }
+
+    adjacency = std::move(coarse_adjacency);
+    h.levels_.push_back(std::move(coarse));
+  }
+  return h;
+}
+
+std::uint64_t Hierarchy::total_nodes() const {
+  std::uint64_t total = 0;
+  for (const auto& l : levels_) total += l.node_count;
+  return total;
+}
+
+HierarchyStats Hierarchy::stats() const {
+  HierarchyStats s;
+  s.vertices = topology_.vertex_count;
+  s.faces = static_cast<std::uint32_t>(topology_.triangles.size());
+  s.levels = static_cast<std::uint32_t>(levels_.size());
+  s.nodes = total_nodes();
+  s.node_ratio = s.vertices ? static_cast<double>(s.nodes) / s.vertices : 0.0;
+  double ratio_sum = 0;
+  std::uint64_t parent_sum = 0, child_nodes = 0;
+  for (std::size_t i = 0; i < levels_.size(); ++i) {
+    s.level_nodes.push_back(levels_[i].node_count);
+    if (i + 1 < levels_.size()) {
+      ratio_sum += static_cast<double>(levels_[i + 1].node_count) / levels_[i].node_count;
+      for (std::uint8_t c : levels_[i].parent_count) parent_sum += c;
+      child_nodes += levels_[i].node_count;
+    }
+  }
+  s.mean_level_ratio = levels_.size() > 1 ? ratio_sum / static_cast<double>(levels_.size() - 1) : 0;
+  s.mean_parents = child_nodes ? static_cast<double>(parent_sum) / static_cast<double>(child_nodes) : 0;
+  s.top_nodes = levels_.empty() ? 0 : levels_.back().node_count;
+  return s;
+}
+
+std::uint64_t Hierarchy::digest() const {
+  std::uint64_t h = 1469598103934665603ull;
+  h = fnv1a(h, topology_.vertex_faces.items);
+  h = fnv1a(h, topology_.vertex_vertices.items);
+  for (const auto& l : levels_) {
+    h = fnv1a(h, &l.node_count, sizeof l.node_count);
+    h = fnv1a(h, l.parent);
+    h = fnv1a(h, l.parent_weight);
+    h = fnv1a(h, l.parent_count);
+    h = fnv1a(h, l.child_weight_sum);
+  }
+  return h;
+}
+
+std::string to_json(const HierarchyStats& s) {
+  std::ostringstream o;
+  o.precision(4);
+  o << "{\"vertices\":" << s.vertices << ",\"faces\":" << s.faces << ",\"levels\":" << s.levels
+    << ",\"nodes\":" << s.nodes << ",\"node_ratio\":" << s.node_ratio
+    << ",\"mean_level_ratio\":" << s.mean_level_ratio << ",\"mean_parents\":" << s.mean_parents
+    << ",\"top_nodes\":" << s.top_nodes << ",\"level_nodes\":[";
+  for (std::size_t i = 0; i < s.level_nodes.size(); ++i)
+    o << (i ? "," : "") << s.level_nodes[i];
+  o << "]}";
+  return o.str();
+}
+
+}  // namespace csculpt

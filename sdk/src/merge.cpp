@@ -1,0 +1,671 @@
+// Paper §3.1: per-vertex isometries -> averages up the hierarchy -> residuals per node ->
+// magnitude-weighted blend per node -> recomposition coarse to fine.
+//
+// Everything is sparse: a diff touches a few percent of the vertices, so each level keeps
+// a list of the nodes that differ from the identity plus a stamp per node (no clearing
+// between merges), and the merged result is computed only for the ancestors of vertices
+// some diff changed. Untouched vertices keep their exact base values (paper's identity).
+#include "csculpt/merge.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <numeric>
+#include <string>
+#include <thread>
+
+#include "csculpt/dual_quat.h"
+#include "csculpt/error.h"
+#include "vertex_isometry_kernel.h"
+
+namespace csculpt {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+constexpr std::array<MergeMethod, 7> kMethods = {
+    MergeMethod::full,
+    MergeMethod::single_parent,
+    MergeMethod::single_level_isometry,
+    MergeMethod::multiscale_translation,
+    MergeMethod::weighted_translation,
+    MergeMethod::average,
+    MergeMethod::sum};
+
+// ---------------------------------------------------------------------------------------
+// The two algebras the pipeline runs on.
+
+/// Unit dual quaternions (positions in the isometry methods).
+struct DqOps {
+  using Value = DualQuat;
+  static Value identity() { return DualQuat::identity(); }
+  static Value zero() { return {{0, 0, 0, 0}, {0, 0, 0, 0}}; }
+  static void add(Value& acc, float w, const Value& q) {
+    acc.real = acc.real + w * q.real;
+    acc.dual = acc.dual + w * q.dual;
+  }
+  /// acc += w (q - 1): sums over sets whose absent members are the identity
+  static void add_offset(Value& acc, float w, const Value& q) {
+    acc.real = acc.real + w * Quat{q.real.w - 1.f, q.real.x, q.real.y, q.real.z};
+    acc.dual = acc.dual + w * q.dual;
+  }
+  /// Average of all children: the absent ones (identity) weigh total - listed.
+  static Value finish_average(Value acc, float total_weight) {
+    acc.real.w += total_weight;
+    return canonical(normalized(acc));
+  }
+  static Value finish_parent_blend(const Value& acc) { return canonical(normalized(acc)); }
+  static Value residual(const Value& parent, const Value& node) {
+    return canonical(inverse(parent) * node);
+  }
+  static Value compose(const Value& parent, const Value& residual) {
+    return canonical(parent * residual);
+  }
+  static float magnitude(const Value& q) { return csculpt::magnitude(q); }
+  static Value finish_blend(const Value& acc, float magnitude_sum, std::uint32_t /*users*/) {
+    if (!(magnitude_sum > 0)) return identity();
+    return canonical(normalized(acc));
+  }
+  static bool is_identity(const Value& q) { return q == identity(); }
+};
+
+/// How translations of several diffs combine at a node.
+enum class TranslationBlend { magnitude, sum, average };
+
+/// Translations of up to 4 components (positions without rotation; material channels in
+/// their linear space).
+struct Vec4 {
+  float v[4] = {0, 0, 0, 0};
+  friend bool operator==(const Vec4&, const Vec4&) = default;
+};
+
+template <TranslationBlend Blend>
+struct VecOps {
+  using Value = Vec4;
+  static Value identity() { return {}; }
+  static Value zero() { return {}; }
+  static void add(Value& acc, float w, const Value& q) {
+    for (int i = 0; i < 4; ++i) acc.v[i] += w * q.v[i];
+  }
+  static void add_offset(Value& acc, float w, const Value& q) { add(acc, w, q); }
+  static Value finish_average(Value acc, float total_weight) {
+    const float inv = total_weight > 0 ? 1.f / total_weight : 0.f;
+    for (float& x : acc.v) x *= inv;
+    return acc;
+  }
+  static Value finish_parent_blend(const Value& acc) { return acc; }
+  static Value residual(const Value& parent, const Value& node) {
+    Value r;
+    for (int i = 0; i < 4; ++i) r.v[i] = node.v[i] - parent.v[i];
+    return r;
+  }
+  static Value compose(const Value& parent, const Value& residual) {
+    Value r;
+    for (int i = 0; i < 4; ++i) r.v[i] = parent.v[i] + residual.v[i];
+    return r;
+  }
+  static float magnitude(const Value& q) {
+    if constexpr (Blend == TranslationBlend::magnitude)
+      return std::sqrt(q.v[0] * q.v[0] + q.v[1] * q.v[1] + q.v[2] * q.v[2] + q.v[3] * q.v[3]);
+    else
+      return 1.f;  // sum and average weigh every diff alike
+  }
+  static Value finish_blend(Value acc, float magnitude_sum, std::uint32_t users) {
+    if constexpr (Blend == TranslationBlend::sum) {
+      return acc;
+    } else if constexpr (Blend == TranslationBlend::average) {
+      const float inv = 1.f / static_cast<float>(users);
+      for (float& x : acc.v) x *= inv;
+      return acc;
+    } else {
+      if (!(magnitude_sum > 0)) return identity();
+      const float inv = 1.f / magnitude_sum;
+      for (float& x : acc.v) x *= inv;
+      return acc;
+    }
+  }
+  static bool is_identity(const Value& q) { return q == identity(); }
+};
+
+// ---------------------------------------------------------------------------------------
+// Sparse per-level storage.
+
+template <class Value>
+struct SparseLevel {
+  std::vector<Value> value;
+  std::vector<std::uint32_t> stamp;
+  std::vector<std::uint32_t> list;  ///< nodes stamped this epoch, in first-touch order
+
+  void reserve_nodes(std::size_t n) {
+    if (value.size() < n) {
+      value.resize(n);
+      stamp.resize(n, 0);
+    }
+  }
+  bool has(std::uint32_t node, std::uint32_t epoch) const { return stamp[node] == epoch; }
+  /// Marks the node; returns true if it was new this epoch.
+  bool mark(std::uint32_t node, std::uint32_t epoch) {
+    if (stamp[node] == epoch) return false;
+    stamp[node] = epoch;
+    list.push_back(node);
+    return true;
+  }
+};
+
+template <class Value>
+struct SparsePyramid {
+  std::vector<SparseLevel<Value>> levels;
+  void reserve(const Hierarchy& h, std::size_t level_count) {
+    if (levels.size() < level_count) levels.resize(level_count);
+    for (std::size_t i = 0; i < level_count; ++i) {
+      levels[i].reserve_nodes(h.levels()[i].node_count);
+      levels[i].list.clear();
+    }
+  }
+};
+
+/// Which parent links the pipeline follows: the K blended parents, or only the heaviest
+/// (the tree of the single-parent variant).
+struct ParentLinks {
+  const Hierarchy* hierarchy = nullptr;
+  bool tree = false;
+
+  std::uint32_t count(std::size_t level, std::uint32_t node) const {
+    return tree ? 1u : hierarchy->levels()[level].parent_count[node];
+  }
+  std::uint32_t parent(std::size_t level, std::uint32_t node, std::uint32_t k) const {
+    return hierarchy->levels()[level].parent[std::size_t{node} * hierarchy->stride() + k];
+  }
+  float weight(std::size_t level, std::uint32_t node, std::uint32_t k) const {
+    return tree ? 1.f
+                : hierarchy->levels()[level].parent_weight[std::size_t{node} * hierarchy->stride() + k];
+  }
+  float child_weight_sum(std::size_t level, std::uint32_t node) const {
+    const HierarchyLevel& l = hierarchy->levels()[level];
+    return tree ? l.tree_child_count[node] : l.child_weight_sum[node];
+  }
+};
+
+/// Averages one diff's level-0 values up the hierarchy (paper: "the isometry of each node
+/// is the average transformation of its children", normalised).
+template <class Ops>
+void decompose(const ParentLinks& links, std::size_t level_count,
+               SparsePyramid<typename Ops::Value>& pyramid, std::uint32_t epoch) {
+  for (std::size_t i = 0; i + 1 < level_count; ++i) {
+    SparseLevel<typename Ops::Value>& fine = pyramid.levels[i];
+    SparseLevel<typename Ops::Value>& coarse = pyramid.levels[i + 1];
+    for (std::uint32_t c : fine.list) {
+      const auto& q = fine.value[c];
+      const std::uint32_t n = links.count(i, c);
+      for (std::uint32_t k = 0; k < n; ++k) {
+        const std::uint32_t p = links.parent(i, c, k);
+        if (coarse.mark(p, epoch)) coarse.value[p] = Ops::zero();
+        Ops::add_offset(coarse.value[p], links.weight(i, c, k), q);
+      }
+    }
+    for (std::uint32_t p : coarse.list)
+      coarse.value[p] = Ops::finish_average(coarse.value[p], links.child_weight_sum(i + 1, p));
+  }
+}
+
+/// The blend of a node's parents' values at `level + 1` (identity for the coarsest level or
+/// when every parent is the identity, exactly, so untouched regions stay bit-exact).
+template <class Ops>
+typename Ops::Value parent_value(const ParentLinks& links, std::size_t level,
+                                 std::size_t level_count, std::uint32_t node,
+                                 const SparseLevel<typename Ops::Value>& coarse,
+                                 std::uint32_t epoch) {
+  if (level + 1 >= level_count) return Ops::identity();
+  const std::uint32_t n = links.count(level, node);
+  bool any = false;
+  typename Ops::Value acc = Ops::zero();
+  for (std::uint32_t k = 0; k < n; ++k) {
+    const std::uint32_t p = links.parent(level, node, k);
+    const float w = links.weight(level, node, k);
+    if (coarse.has(p, epoch)) {
+      Ops::add(acc, w, coarse.value[p]);
+      any = true;
+    } else {
+      Ops::add(acc, w, Ops::identity());
+    }
+  }
+  return any ? Ops::finish_parent_blend(acc) : Ops::identity();
+}
+
+/// Residuals of every diff at each needed node, blended by magnitude, recomposed from the
+/// coarsest level down. Fills merged.levels[0] for the nodes in merged.levels[0].list.
+template <class Ops>
+void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
+                           std::span<SparsePyramid<typename Ops::Value>> users,
+                           SparsePyramid<typename Ops::Value>& merged, std::uint32_t epoch) {
+  using Value = typename Ops::Value;
+  // The nodes the result needs: ancestors of the vertices some diff changed.
+  for (std::size_t i = 0; i + 1 < level_count; ++i) {
+    SparseLevel<Value>& coarse = merged.levels[i + 1];
+    for (std::uint32_t c : merged.levels[i].list) {
+      const std::uint32_t n = links.count(i, c);
+      for (std::uint32_t k = 0; k < n; ++k) coarse.mark(links.parent(i, c, k), epoch);
+    }
+  }
+  const auto user_count = static_cast<std::uint32_t>(users.size());
+  for (std::size_t level = level_count; level-- > 0;) {
+    SparseLevel<Value>& out = merged.levels[level];
+    for (std::uint32_t c : out.list) {
+      Value blend = Ops::zero();
+      float magnitude_sum = 0;
+      for (auto& user : users) {
+        const SparseLevel<Value>& ul = user.levels[level];
+        const Value q = ul.has(c, epoch) ? ul.value[c] : Ops::identity();
+        const Value parent =
+            level + 1 < level_count
+                ? parent_value<Ops>(links, level, level_count, c, user.levels[level + 1], epoch)
+                : Ops::identity();
+        const Value r = Ops::residual(parent, q);
+        const float m = Ops::magnitude(r);
+        Ops::add(blend, m, r);
+        magnitude_sum += m;
+      }
+      const Value residual = Ops::finish_blend(blend, magnitude_sum, user_count);
+      const Value parent =
+          level + 1 < level_count
+              ? parent_value<Ops>(links, level, level_count, c, merged.levels[level + 1], epoch)
+              : Ops::identity();
+      out.value[c] = Ops::compose(parent, residual);
+    }
+  }
+}
+
+struct MethodTraits {
+  bool isometry;        // dual quaternions for positions
+  bool multiscale;      // use the hierarchy
+  bool tree;            // K = 1
+  TranslationBlend blend;
+};
+
+MethodTraits traits(MergeMethod m) {
+  switch (m) {
+    case MergeMethod::full: return {true, true, false, TranslationBlend::magnitude};
+    case MergeMethod::single_parent: return {true, true, true, TranslationBlend::magnitude};
+    case MergeMethod::single_level_isometry: return {true, false, false, TranslationBlend::magnitude};
+    case MergeMethod::multiscale_translation: return {false, true, false, TranslationBlend::magnitude};
+    case MergeMethod::weighted_translation: return {false, false, false, TranslationBlend::magnitude};
+    case MergeMethod::average: return {false, false, false, TranslationBlend::average};
+    case MergeMethod::sum: return {false, false, false, TranslationBlend::sum};
+  }
+  throw InvalidInput("unknown merge method " + std::to_string(static_cast<std::uint32_t>(m)));
+}
+
+/// Canonical order of diffs by content, so the floating-point sums do not depend on the
+/// order the diffs arrived in.
+std::vector<std::size_t> canonical_order(std::span<const Diff> diffs) {
+  std::vector<std::uint64_t> keys(diffs.size());
+  for (std::size_t i = 0; i < diffs.size(); ++i) keys[i] = digest(diffs[i]);
+  std::vector<std::size_t> order(diffs.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  auto bytes_less = [](const auto& a, const auto& b) {
+    if (a.size() != b.size()) return a.size() < b.size();
+    return std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])) < 0;
+  };
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    if (keys[a] != keys[b]) return keys[a] < keys[b];
+    const Diff& x = diffs[a];
+    const Diff& y = diffs[b];
+    if (x.positions.indices != y.positions.indices)
+      return bytes_less(x.positions.indices, y.positions.indices);
+    if (x.positions.values != y.positions.values)
+      return bytes_less(x.positions.values, y.positions.values);
+    for (std::size_t c = 0; c < std::min(x.channels.size(), y.channels.size()); ++c) {
+      if (x.channels[c].change.indices != y.channels[c].change.indices)
+        return bytes_less(x.channels[c].change.indices, y.channels[c].change.indices);
+      if (x.channels[c].change.values != y.channels[c].change.values)
+        return bytes_less(x.channels[c].change.values, y.channels[c].change.values);
+    }
+    return false;  // identical content: either order gives the same sums
+  });
+  return order;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------
+
+struct Merger::Workspace {
+  std::uint32_t epoch = 0;
+  std::vector<SparsePyramid<DualQuat>> dq_users;
+  SparsePyramid<DualQuat> dq_merged;
+  std::vector<SparsePyramid<Vec4>> vec_users;
+  SparsePyramid<Vec4> vec_merged;
+  /// Per diff: where each vertex's edited position sits in the diff (valid when stamped).
+  struct Lookup {
+    std::vector<std::uint32_t> slot;
+    std::vector<std::uint32_t> stamp;
+    detail::VertexIsometryScratch isometry;
+    std::vector<std::uint32_t> touched;
+  };
+  std::vector<Lookup> lookups;
+
+  std::uint32_t next_epoch() {
+    if (++epoch == 0) {  // wrapped: every stamp must be forgotten
+      auto clear = [](auto& pyramid) {
+        for (auto& l : pyramid.levels) std::fill(l.stamp.begin(), l.stamp.end(), 0);
+      };
+      for (auto& p : dq_users) clear(p);
+      clear(dq_merged);
+      for (auto& p : vec_users) clear(p);
+      clear(vec_merged);
+      for (auto& l : lookups) std::fill(l.stamp.begin(), l.stamp.end(), 0);
+      epoch = 1;
+    }
+    return epoch;
+  }
+};
+
+Merger::Merger(const Hierarchy& hierarchy)
+    : hierarchy_(hierarchy), workspace_(std::make_unique<Workspace>()) {}
+Merger::~Merger() = default;
+
+namespace {
+
+/// Runs the translation pipeline with the blend rule chosen at run time.
+template <class Fn>
+void with_translation_ops(TranslationBlend blend, Fn&& fn) {
+  switch (blend) {
+    case TranslationBlend::magnitude: fn(VecOps<TranslationBlend::magnitude>{}); break;
+    case TranslationBlend::sum: fn(VecOps<TranslationBlend::sum>{}); break;
+    case TranslationBlend::average: fn(VecOps<TranslationBlend::average>{}); break;
+  }
+}
+
+}  // namespace
+
+Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod method,
+                   const MergeFrame& frame) {
+  const MethodTraits t = traits(method);
+  Workspace& ws = *workspace_;
+  timings_ = {};
+  // Per node visited: its value, its stamp and its parent links (index + weight).
+  auto count_work = [&](const auto& user_pyramids, std::uint32_t user_count, const auto& merged_pyramid,
+                        std::size_t levels, std::size_t value_bytes) {
+    const std::size_t per_node = value_bytes + 4 + hierarchy_.stride() * 8;
+    auto add = [&](const auto& pyramid) {
+      for (std::size_t i = 0; i < levels; ++i) {
+        timings_.nodes_visited += pyramid.levels[i].list.size();
+        timings_.bytes_touched += pyramid.levels[i].list.size() * per_node;
+      }
+    };
+    for (std::uint32_t u = 0; u < user_count; ++u) add(user_pyramids[u]);
+    add(merged_pyramid);
+    for (const Diff& d : diffs) timings_.bytes_touched += d.positions.indices.size() * 16;
+  };
+  if (base.vertex_count() != hierarchy_.topology().vertex_count)
+    throw InvalidInput("merge: the mesh has " + std::to_string(base.vertex_count()) +
+                       " vertices but the hierarchy was built for " +
+                       std::to_string(hierarchy_.topology().vertex_count));
+  for (std::size_t i = 0; i < diffs.size(); ++i) validate(diffs[i], base, "diff " + std::to_string(i));
+  if (!(frame.scale > 0) || !std::isfinite(frame.scale))
+    throw InvalidInput("merge: the frame scale must be positive and finite");
+
+  const std::vector<std::size_t> order = canonical_order(diffs);
+  const auto users = static_cast<std::uint32_t>(diffs.size());
+  const std::size_t level_count = t.multiscale ? hierarchy_.levels().size() : 1;
+  const ParentLinks links{&hierarchy_, t.tree};
+  const std::uint32_t vertex_count = static_cast<std::uint32_t>(base.vertex_count());
+
+  Diff merged;
+  merged.vertex_count = vertex_count;
+  if (users == 0) {
+    for (const Channel& c : base.channels) merged.channels.push_back({c.desc, {}});
+    return merged;
+  }
+
+  detail::Frame local{frame.center, 1.f / frame.scale};
+  auto from_local = [&](const Vec3f& p) {
+    return Vec3f{p.x * frame.scale + frame.center.x, p.y * frame.scale + frame.center.y,
+                 p.z * frame.scale + frame.center.z};
+  };
+
+  if (ws.lookups.size() < users) ws.lookups.resize(users);
+
+  // ---- positions ----
+  {
+    auto t0 = Clock::now();
+    const std::uint32_t epoch = ws.next_epoch();
+    // edited-position lookups per diff
+    for (std::uint32_t u = 0; u < users; ++u) {
+      auto& lk = ws.lookups[u];
+      if (lk.slot.size() < vertex_count) {
+        lk.slot.resize(vertex_count);
+        lk.stamp.resize(vertex_count, 0);
+      }
+      const AttributeDiff& pd = diffs[order[u]].positions;
+      for (std::uint32_t i = 0; i < pd.indices.size(); ++i) {
+        lk.slot[pd.indices[i]] = i;
+        lk.stamp[pd.indices[i]] = epoch;
+      }
+    }
+    auto edited_of = [&](std::uint32_t u) {
+      const auto& lk = ws.lookups[u];
+      const AttributeDiff& pd = diffs[order[u]].positions;
+      return [&lk, &pd, &base, epoch](std::uint32_t v) -> Vec3f {
+        if (lk.stamp[v] != epoch) return base.positions[v];
+        const float* p = pd.values.data() + 3 * std::size_t{lk.slot[v]};
+        return {p[0], p[1], p[2]};
+      };
+    };
+    if (t.isometry) {
+      if (ws.dq_users.size() < users) ws.dq_users.resize(users);
+      for (std::uint32_t u = 0; u < users; ++u) ws.dq_users[u].reserve(hierarchy_, level_count);
+      ws.dq_merged.reserve(hierarchy_, level_count);
+      for (std::uint32_t u = 0; u < users; ++u) {
+        auto& lk = ws.lookups[u];
+        lk.isometry.resize(vertex_count, base.face_count());
+        auto& level0 = ws.dq_users[u].levels[0];
+        detail::compute_vertex_isometries(hierarchy_.topology(), base.positions,
+                                          diffs[order[u]].positions.indices, edited_of(u),
+                                          lk.isometry, level0.value, lk.touched, local);
+        for (std::uint32_t v : lk.touched) {
+          level0.stamp[v] = epoch;
+          level0.list.push_back(v);
+        }
+      }
+      timings_.isometry_ms += ms_since(t0);
+      t0 = Clock::now();
+      for (std::uint32_t u = 0; u < users; ++u)
+        decompose<DqOps>(links, level_count, ws.dq_users[u], epoch);
+      timings_.decompose_ms += ms_since(t0);
+      t0 = Clock::now();
+      for (std::uint32_t u = 0; u < users; ++u)
+        for (std::uint32_t v : diffs[order[u]].positions.indices) ws.dq_merged.levels[0].mark(v, epoch);
+      blend_and_reconstruct<DqOps>(links, level_count,
+                                   std::span(ws.dq_users.data(), users), ws.dq_merged, epoch);
+      timings_.blend_ms += ms_since(t0);
+      count_work(ws.dq_users, users, ws.dq_merged, level_count, sizeof(DualQuat));
+      t0 = Clock::now();
+      auto& changed_union = ws.dq_merged.levels[0].list;
+      std::sort(changed_union.begin(), changed_union.end());
+      for (std::uint32_t v : changed_union) {
+        const Vec3f p = from_local(ws.dq_merged.levels[0].value[v].apply(local.to_local(base.positions[v])));
+        if (!(p == base.positions[v])) {
+          merged.positions.indices.push_back(v);
+          merged.positions.values.insert(merged.positions.values.end(), {p.x, p.y, p.z});
+        }
+      }
+      timings_.apply_ms += ms_since(t0);
+    } else {
+      with_translation_ops(t.blend, [&](auto ops) {
+        using Ops = decltype(ops);
+        using Value = typename Ops::Value;
+        if (ws.vec_users.size() < users) ws.vec_users.resize(users);
+        auto pyramid = [](SparsePyramid<Vec4>& p) -> SparsePyramid<Vec4>& { return p; };
+        for (std::uint32_t u = 0; u < users; ++u) ws.vec_users[u].reserve(hierarchy_, level_count);
+        ws.vec_merged.reserve(hierarchy_, level_count);
+        for (std::uint32_t u = 0; u < users; ++u) {
+          auto& level0 = pyramid(ws.vec_users[u]).levels[0];
+          const AttributeDiff& pd = diffs[order[u]].positions;
+          for (std::uint32_t i = 0; i < pd.indices.size(); ++i) {
+            const std::uint32_t v = pd.indices[i];
+            const float* e = pd.values.data() + 3 * std::size_t{i};
+            const Vec3f a = local.to_local(base.positions[v]);
+            const Vec3f b = local.to_local({e[0], e[1], e[2]});
+            level0.mark(v, epoch);
+            level0.value[v] = Value{{b.x - a.x, b.y - a.y, b.z - a.z, 0}};
+          }
+        }
+        timings_.isometry_ms += ms_since(t0);
+        t0 = Clock::now();
+        for (std::uint32_t u = 0; u < users; ++u)
+          decompose<Ops>(links, level_count, pyramid(ws.vec_users[u]), epoch);
+        timings_.decompose_ms += ms_since(t0);
+        t0 = Clock::now();
+        auto& out = pyramid(ws.vec_merged);
+        for (std::uint32_t u = 0; u < users; ++u)
+          for (std::uint32_t v : diffs[order[u]].positions.indices) out.levels[0].mark(v, epoch);
+        blend_and_reconstruct<Ops>(
+            links, level_count,
+            std::span(ws.vec_users.data(), users), out,
+            epoch);
+        timings_.blend_ms += ms_since(t0);
+        count_work(ws.vec_users, users, ws.vec_merged, level_count, sizeof(Vec4));
+        t0 = Clock::now();
+        auto& list = out.levels[0].list;
+        std::sort(list.begin(), list.end());
+        for (std::uint32_t v : list) {
+          const Value& d = out.levels[0].value[v];
+          const Vec3f a = local.to_local(base.positions[v]);
+          const Vec3f p = from_local({a.x + d.v[0], a.y + d.v[1], a.z + d.v[2]});
+          if (!(p == base.positions[v])) {
+            merged.positions.indices.push_back(v);
+            merged.positions.values.insert(merged.positions.values.end(), {p.x, p.y, p.z});
+          }
+        }
+        timings_.apply_ms += ms_since(t0);
+      });
+    }
+  }
+
+  // ---- channels: translations in each channel's linear space ----
+  for (std::size_t ci = 0; ci < base.channels.size(); ++ci) {
+    const Channel& channel = base.channels[ci];
+    const std::uint32_t width = channel.desc.width;
+    ChannelDiff out_diff{channel.desc, {}};
+    auto t0 = Clock::now();
+    const std::uint32_t epoch = ws.next_epoch();
+    const TranslationBlend blend = t.blend;
+    with_translation_ops(blend, [&](auto ops) {
+      using Ops = decltype(ops);
+      using Value = typename Ops::Value;
+      if (ws.vec_users.size() < users) ws.vec_users.resize(users);
+      auto pyramid = [](SparsePyramid<Vec4>& p) -> SparsePyramid<Vec4>& { return p; };
+      for (std::uint32_t u = 0; u < users; ++u) ws.vec_users[u].reserve(hierarchy_, level_count);
+      ws.vec_merged.reserve(hierarchy_, level_count);
+      auto& out = pyramid(ws.vec_merged);
+      for (std::uint32_t u = 0; u < users; ++u) {
+        auto& level0 = pyramid(ws.vec_users[u]).levels[0];
+        for (const ChannelDiff& cd : diffs[order[u]].channels) {
+          if (cd.desc.name != channel.desc.name) continue;
+          for (std::uint32_t i = 0; i < cd.change.indices.size(); ++i) {
+            const std::uint32_t v = cd.change.indices[i];
+            Value d;
+            for (std::uint32_t k = 0; k < width; ++k) {
+              const float b = to_linear(channel.desc.linearisation, channel.values[std::size_t{v} * width + k]);
+              const float e = to_linear(channel.desc.linearisation, cd.change.values[std::size_t{i} * width + k]);
+              d.v[k] = e - b;
+            }
+            level0.mark(v, epoch);
+            level0.value[v] = d;
+            out.levels[0].mark(v, epoch);
+          }
+        }
+      }
+      for (std::uint32_t u = 0; u < users; ++u)
+        decompose<Ops>(links, level_count, pyramid(ws.vec_users[u]), epoch);
+      blend_and_reconstruct<Ops>(
+          links, level_count,
+          std::span(ws.vec_users.data(), users), out,
+          epoch);
+      auto& list = out.levels[0].list;
+      std::sort(list.begin(), list.end());
+      for (std::uint32_t v : list) {
+        const Value& d = out.levels[0].value[v];
+        bool changed = false;
+        float result[4];
+        for (std::uint32_t k = 0; k < width; ++k) {
+          const float b = channel.values[std::size_t{v} * width + k];
+          result[k] = from_linear(channel.desc.linearisation,
+                                  to_linear(channel.desc.linearisation, b) + d.v[k]);
+          changed |= std::memcmp(&result[k], &b, sizeof(float)) != 0;
+        }
+        if (changed) {
+          out_diff.change.indices.push_back(v);
+          out_diff.change.values.insert(out_diff.change.values.end(), result, result + width);
+        }
+      }
+    });
+    timings_.blend_ms += ms_since(t0);
+    merged.channels.push_back(std::move(out_diff));
+  }
+  return merged;
+}
+
+MergeFrame MergeFrame::fit(std::span<const Vec3f> positions) {
+  MergeFrame f;
+  if (positions.empty()) return f;
+  Vec3f lo = positions[0], hi = positions[0];
+  for (const Vec3f& p : positions) {
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+  }
+  f.center = {0.5f * (lo.x + hi.x), 0.5f * (lo.y + hi.y), 0.5f * (lo.z + hi.z)};
+  const float dx = hi.x - lo.x, dy = hi.y - lo.y, dz = hi.z - lo.z;
+  const float diag = std::sqrt(dx * dx + dy * dy + dz * dz);
+  f.scale = diag > 0 && std::isfinite(diag) ? diag : 1.f;
+  return f;
+}
+
+std::string_view to_string(MergeMethod method) {
+  switch (method) {
+    case MergeMethod::full: return "full";
+    case MergeMethod::single_parent: return "single-parent";
+    case MergeMethod::single_level_isometry: return "single-level-isometry";
+    case MergeMethod::multiscale_translation: return "multiscale-translation";
+    case MergeMethod::weighted_translation: return "weighted-translation";
+    case MergeMethod::average: return "average";
+    case MergeMethod::sum: return "sum";
+  }
+  return "unknown";
+}
+
+MergeMethod merge_method_from_string(std::string_view name) {
+  for (MergeMethod m : kMethods)
+    if (to_string(m) == name) return m;
+  std::string valid;
+  for (MergeMethod m : kMethods) valid += (valid.empty() ? "" : ", ") + std::string(to_string(m));
+  throw InvalidInput("unknown merge method '" + std::string(name) + "' (valid: " + valid + ")");
+}
+
+std::span<const MergeMethod> all_merge_methods() { return kMethods; }
+
+Mesh merge_meshes(const Mesh& base, std::span<const Mesh> edits, MergeMethod method,
+                  std::uint32_t max_parents) {
+  validate(base, "base");
+  std::vector<Diff> diffs;
+  diffs.reserve(edits.size());
+  for (std::size_t i = 0; i < edits.size(); ++i) {
+    validate(edits[i], "edit " + std::to_string(i + 1));
+    diffs.push_back(capture_diff(base, edits[i]));
+  }
+  HierarchyOptions options;
+  options.max_parents = max_parents;
+  const Hierarchy hierarchy = Hierarchy::build(base, options);
+  Merger merger(hierarchy);
+  Mesh result = base;
+  apply_diff(merger.merge(base, diffs, method), result);
+  return result;
+}
+
+}  // namespace csculpt
