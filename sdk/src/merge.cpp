@@ -481,8 +481,8 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
       t0 = Clock::now();
       for (std::uint32_t u = 0; u < users; ++u)
         for (std::uint32_t v : diffs[order[u]].positions.indices) ws.dq_merged.levels[0].mark(v, epoch);
-      blend_and_reconstruct<DqOps>(links, level_count,
-                                   std::span(ws.dq_users.data(), users), ws.dq_merged, epoch);
+      blend_and_reconstruct<DqOps>(links, level_count, std::span(ws.dq_users.data(), users),
+                                   ws.dq_merged, epoch);
       timings_.blend_ms += ms_since(t0);
       count_work(ws.dq_users, users, ws.dq_merged, level_count, sizeof(DualQuat));
       t0 = Clock::now();
@@ -527,8 +527,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
           for (std::uint32_t v : diffs[order[u]].positions.indices) out.levels[0].mark(v, epoch);
         blend_and_reconstruct<Ops>(
             links, level_count,
-            std::span(ws.vec_users.data(), users), out,
-            epoch);
+            std::span(ws.vec_users.data(), users), out, epoch);
         timings_.blend_ms += ms_since(t0);
         count_work(ws.vec_users, users, ws.vec_merged, level_count, sizeof(Vec4));
         t0 = Clock::now();
@@ -586,8 +585,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
         decompose<Ops>(links, level_count, pyramid(ws.vec_users[u]), epoch);
       blend_and_reconstruct<Ops>(
           links, level_count,
-          std::span(ws.vec_users.data(), users), out,
-          epoch);
+          std::span(ws.vec_users.data(), users), out, epoch);
       auto& list = out.levels[0].list;
       std::sort(list.begin(), list.end());
       for (std::uint32_t v : list) {
