@@ -12,6 +12,7 @@
 #include "csculpt/hierarchy.h"
 #include "csculpt/io.h"
 #include "csculpt/merge.h"
+#include "csculpt/scenarios.h"
 
 namespace {
 
@@ -75,6 +76,48 @@ int run_diff(const std::string& base_path, const std::string& edited_path) {
   return 0;
 }
 
+int run_scenarios(std::uint32_t faces, bool json) {
+  const std::vector<Scenario> scenarios = make_scenarios(faces);
+  if (!json) {
+    std::printf("| scenario |");
+    for (MergeMethod m : all_merge_methods()) std::printf(" %s |", std::string(to_string(m)).c_str());
+    std::printf("\n|---|");
+    for (std::size_t i = 0; i < all_merge_methods().size(); ++i) std::printf("---|");
+    std::printf("\n");
+  }
+  for (const Scenario& sc : scenarios) {
+    const Hierarchy hierarchy = Hierarchy::build(sc.base);
+    Merger merger(hierarchy);
+    std::vector<Diff> diffs;
+    for (const Mesh& e : sc.edits) diffs.push_back(capture_diff(sc.base, e));
+    if (!json) std::printf("| %s |", sc.name.c_str());
+    for (MergeMethod m : all_merge_methods()) {
+      Mesh merged = sc.base;
+      apply_diff(merger.merge(sc.base, diffs, m), merged);
+      const ScenarioScore s = score(sc, merged, hierarchy.topology());
+      if (json) {
+        std::printf("{\"scenario\":\"%s\",\"method\":\"%s\",\"faces\":%zu,\"rel_err\":%.5f,"
+                    "\"roughness\":%.4f,\"channel_err\":%.5f}\n",
+                    sc.name.c_str(), std::string(to_string(m)).c_str(), sc.base.face_count(),
+                    s.rel_err, s.roughness, s.channel_err);
+      } else if (sc.has_expected) {
+        bool has_channels = false;
+        for (const Mesh& e : sc.edits)
+          for (std::size_t c = 0; c < e.channels.size(); ++c)
+            if (e.channels[c].values != sc.base.channels[c].values) has_channels = true;
+        const bool has_positions = s.rel_err > 0 || !has_channels;
+        if (has_positions && has_channels) std::printf(" %.3f / %.3f |", s.rel_err, s.channel_err);
+        else if (has_channels) std::printf(" %.4f |", s.channel_err);
+        else std::printf(" %.3f |", s.rel_err);
+      } else {
+        std::printf(" r=%.2f |", s.roughness);
+      }
+    }
+    if (!json) std::printf("\n");
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -110,6 +153,13 @@ int main(int argc, char** argv) {
   diff->add_option("base", base, "base mesh")->required()->check(CLI::ExistingFile);
   diff->add_option("edited", edited, "edited mesh")->required()->check(CLI::ExistingFile);
 
+  auto* scenarios = app.add_subcommand(
+      "scenarios", "error of every merge method on the built-in scenarios (Markdown table or JSON)");
+  std::uint32_t scenario_faces = 40000;
+  bool scenario_json = false;
+  scenarios->add_option("--faces", scenario_faces, "sphere resolution")->capture_default_str()->check(CLI::Range(500u, 5000000u));
+  scenarios->add_flag("--json", scenario_json, "one JSON object per scenario and method");
+
   auto* bench = app.add_subcommand("bench", "benchmarks (one JSON object per result)");
   bench->require_subcommand(1);
   csculpt::cli::BenchMergeOptions bo;
@@ -128,6 +178,7 @@ int main(int argc, char** argv) {
     if (*merge) return run_merge(base, edits, out, method, k);
     if (*hierarchy) return run_hierarchy(mesh_path, k);
     if (*diff) return run_diff(base, edited);
+    if (*scenarios) return run_scenarios(scenario_faces, scenario_json);
     if (*bench_merge) return csculpt::cli::bench_merge(bo);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "csculpt: error: %s\n", e.what());

@@ -3,6 +3,8 @@
 #include "csculpt/hierarchy.h"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <sstream>
@@ -56,6 +58,67 @@ struct WeightedParent {
   std::uint32_t node;
   float weight;
 };
+
+/// Least change to the weights (sum 1) that makes sum w_k X_k = x in the tangent directions
+/// of the parents' spread, then clamped positive and renormalised: smooth edits then leave
+/// (almost) no residual at fine levels, so edits of different scales stay on their own levels.
+template <class PositionOf>
+void adjust_for_linear_precision(const Vec3f& x, std::span<WeightedParent> parents,
+                                 PositionOf&& position_of) {
+  const std::size_t n = parents.size();
+  double cx = 0, cy = 0, cz = 0;
+  for (const auto& p : parents) {
+    const Vec3f& q = position_of(p.node);
+    cx += p.weight * q.x;
+    cy += p.weight * q.y;
+    cz += p.weight * q.z;
+  }
+  // constraint rows: sum w = 1 (already), sum w (X - x) = 0 -> residual r = c - x
+  const double r[3] = {cx - x.x, cy - x.y, cz - x.z};
+  // Solve (D D^T + eps I) lam = r for D = centred parent offsets (3 x n), w += -D^T lam.
+  double mean[3] = {0, 0, 0};
+  std::array<std::array<double, 3>, 32> d{};
+  for (std::size_t k = 0; k < n; ++k) {
+    const Vec3f& q = position_of(parents[k].node);
+    d[k] = {double(q.x) - x.x, double(q.y) - x.y, double(q.z) - x.z};
+    for (int i = 0; i < 3; ++i) mean[i] += d[k][static_cast<std::size_t>(i)] / static_cast<double>(n);
+  }
+  double m[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+  double scale = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    for (std::size_t i = 0; i < 3; ++i) d[k][i] -= mean[i];
+    for (std::size_t i = 0; i < 3; ++i)
+      for (std::size_t j = 0; j < 3; ++j) m[i][j] += d[k][i] * d[k][j];
+  }
+  scale = m[0][0] + m[1][1] + m[2][2];
+  if (!(scale > 0)) return;
+  // regularise the (nearly flat) normal direction so it takes no part
+  for (int i = 0; i < 3; ++i) m[i][i] += 1e-3 * scale;
+  const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+                     m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                     m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+  if (!(std::abs(det) > 0)) return;
+  double inv[3][3];
+  inv[0][0] = (m[1][1] * m[2][2] - m[1][2] * m[2][1]) / det;
+  inv[0][1] = (m[0][2] * m[2][1] - m[0][1] * m[2][2]) / det;
+  inv[0][2] = (m[0][1] * m[1][2] - m[0][2] * m[1][1]) / det;
+  inv[1][0] = (m[1][2] * m[2][0] - m[1][0] * m[2][2]) / det;
+  inv[1][1] = (m[0][0] * m[2][2] - m[0][2] * m[2][0]) / det;
+  inv[1][2] = (m[0][2] * m[1][0] - m[0][0] * m[1][2]) / det;
+  inv[2][0] = (m[1][0] * m[2][1] - m[1][1] * m[2][0]) / det;
+  inv[2][1] = (m[0][1] * m[2][0] - m[0][0] * m[2][1]) / det;
+  inv[2][2] = (m[0][0] * m[1][1] - m[0][1] * m[1][0]) / det;
+  double lam[3];
+  for (int i = 0; i < 3; ++i) lam[i] = inv[i][0] * r[0] + inv[i][1] * r[1] + inv[i][2] * r[2];
+  double total = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double w = parents[k].weight - (d[k][0] * lam[0] + d[k][1] * lam[1] + d[k][2] * lam[2]);
+    parents[k].weight = static_cast<float>(std::max(w, 0.0));
+    total += parents[k].weight;
+  }
+  if (!(total > 0)) return;
+  for (std::size_t k = 0; k < n; ++k) parents[k].weight = static_cast<float>(parents[k].weight / total);
+}
 
 }  // namespace
 
@@ -117,7 +180,8 @@ Topology Topology::build(std::uint32_t vertex_count, std::span<const Triangle> t
 }
 
 Hierarchy Hierarchy::build(std::uint32_t vertex_count, std::span<const Triangle> triangles,
-                           const HierarchyOptions& options) {
+                           const HierarchyOptions& options, std::span<const Vec3f> positions) {
+  const bool precise = options.linear_precision && positions.size() == vertex_count;
   if (options.max_parents < 1 || options.max_parents > 32)
     throw InvalidInput("hierarchy: K (max parents) must be between 1 and 32, got " +
                        std::to_string(options.max_parents));
@@ -238,7 +302,7 @@ Hierarchy Hierarchy::build(std::uint32_t vertex_count, std::span<const Triangle>
       gather.resize(unique);
       // The normalisation to 1 before the trim does not change which K are heaviest, so the
       // trim and one final normalisation give the paper's weights.
-      const std::size_t keep = std::min<std::size_t>(K, gather.size());
+      std::size_t keep = std::min<std::size_t>(K, gather.size());
       std::partial_sort(gather.begin(), gather.begin() + static_cast<std::ptrdiff_t>(keep),
                         gather.end(), [](const WeightedParent& a, const WeightedParent& b) {
                           return a.weight != b.weight ? a.weight > b.weight : a.node < b.node;
@@ -247,10 +311,23 @@ Hierarchy Hierarchy::build(std::uint32_t vertex_count, std::span<const Triangle>
       for (std::size_t k = 0; k < keep; ++k) total += gather[k].weight;
       std::uint32_t* parent = fine.parent.data() + std::size_t{x} * K;
       float* weight = fine.parent_weight.data() + std::size_t{x} * K;
+      for (std::size_t k = 0; k < keep; ++k) gather[k].weight /= total;
+      if (precise && keep > 1) {
+        const Vec3f& self = positions[fine.representative[x]];
+        adjust_for_linear_precision(self, {gather.data(), keep}, [&](std::uint32_t node) -> const Vec3f& {
+          return positions[coarse.representative[node]];
+        });
+        // parents the adjustment clamped to zero are dropped; heaviest first again
+        std::sort(gather.begin(), gather.begin() + static_cast<std::ptrdiff_t>(keep),
+                  [](const WeightedParent& a, const WeightedParent& b) {
+                    return a.weight != b.weight ? a.weight > b.weight : a.node < b.node;
+                  });
+        while (keep > 1 && !(gather[keep - 1].weight > 0)) --keep;
+      }
       for (std::size_t k = 0; k < K; ++k) {
         if (k < keep) {
           parent[k] = gather[k].node;
-          weight[k] = gather[k].weight / total;
+          weight[k] = gather[k].weight;
           coarse.child_weight_sum[parent[k]] += weight[k];
         } else {
           parent[k] = gather[0].node;

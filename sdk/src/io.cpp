@@ -21,7 +21,9 @@ using io_detail::cat;
 // disk image, a video) from exhausting memory.
 constexpr std::uint64_t kMaxFileBytes = std::uint64_t{2} << 30;
 
-std::string errno_message(int err) { return std::error_code(err, std::generic_category()).message(); }
+std::string errno_message(int err) {
+  return std::error_code(err, std::generic_category()).message();
+}
 
 struct FileCloser {
   void operator()(std::FILE* f) const { std::fclose(f); }
@@ -34,15 +36,19 @@ std::string read_file(const std::string& path) {
     throw IoError(cat(path, ": cannot open: ", ec ? ec.message() : "no such file"));
   }
   if (std::filesystem::is_directory(status)) throw IoError(cat(path, ": is a directory"));
+  std::uintmax_t expected = 0;
   if (std::filesystem::is_regular_file(status)) {
     const std::uintmax_t size = std::filesystem::file_size(path, ec);
     if (!ec && size > kMaxFileBytes) {
       throw InvalidInput(cat(path, ": file is ", size, " bytes, more than the 2 GiB limit"));
     }
+    if (!ec) expected = size;
   }
   std::unique_ptr<std::FILE, FileCloser> f(std::fopen(path.c_str(), "rb"));
   if (!f) throw IoError(cat(path, ": cannot open: ", errno_message(errno)));
   std::string bytes;
+  // One chunk of slack so that reading up to the expected size does not reallocate.
+  bytes.reserve(static_cast<std::size_t>(expected) + (std::size_t{1} << 20));
   constexpr std::size_t kChunk = std::size_t{1} << 20;
   for (;;) {
     const std::size_t old = bytes.size();

@@ -80,8 +80,8 @@ inline bool below_one(std::string_view t) {
   for (std::size_t i = 0; i < t.size(); ++i) {
     if (t[i] >= '1' && t[i] <= '9') {
       // Power of ten of the leading significant digit.
-      const auto lead = i < dot ? static_cast<std::int64_t>(dot - i - 1)
-                                : -static_cast<std::int64_t>(i - dot);
+      const auto lead =
+          i < dot ? static_cast<std::int64_t>(dot - i - 1) : -static_cast<std::int64_t>(i - dot);
       return lead + exp10 < 0;
     }
   }

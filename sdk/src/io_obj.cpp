@@ -54,7 +54,8 @@ Mesh parse_obj(std::string_view bytes, std::string_view what) {
   }
   if (bytes.starts_with("\xEF\xBB\xBF")) bytes.remove_prefix(3);
   if (const std::size_t nul = bytes.find('\0'); nul != std::string_view::npos) {
-    const auto line = 1 + std::count(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(nul), '\n');
+    const auto line =
+        1 + std::count(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(nul), '\n');
     throw InvalidInput(cat(what, ":", line, ": NUL byte: not a text OBJ file (UTF-16 or binary?)"));
   }
 

@@ -82,8 +82,8 @@ Mesh parse_off(std::string_view bytes, std::string_view what) {
   const std::string_view nv_text = io_detail::next_token(counts);
   const std::string_view nf_text = io_detail::next_token(counts);
   if (!io_detail::parse_uint(nv_text, nv) || !io_detail::parse_uint(nf_text, nf)) {
-    throw InvalidInput(cat(what, ":", counts_line, ": expected '<vertices> <faces> [<edges>]', got ",
-                           quote(counts_text)));
+    throw InvalidInput(cat(what, ":", counts_line,
+                           ": expected '<vertices> <faces> [<edges>]', got ", quote(counts_text)));
   }
   // Each vertex needs at least "0 0 0" and a newline, each face "3 0 1 2" and a newline:
   // reject impossible counts before reserving anything.
@@ -104,12 +104,12 @@ Mesh parse_off(std::string_view bytes, std::string_view what) {
     for (int k = 0; k < 3; ++k) {
       const std::string_view token = io_detail::next_token(line);
       if (token.empty()) {
-        throw InvalidInput(cat(what, ":", lines.line_no(), ": vertex ", v, " has ", k,
-                               " coordinates, need 3"));
+        throw InvalidInput(
+            cat(what, ":", lines.line_no(), ": vertex ", v, " has ", k, " coordinates, need 3"));
       }
       if (!io_detail::parse_float(token, xyz[k])) {
-        throw InvalidInput(cat(what, ":", lines.line_no(), ": vertex ", v,
-                               ": bad coordinate ", quote(token)));
+        throw InvalidInput(
+            cat(what, ":", lines.line_no(), ": vertex ", v, ": bad coordinate ", quote(token)));
       }
       if (!std::isfinite(xyz[k])) {
         throw InvalidInput(cat(what, ":", lines.line_no(), ": vertex ", v, ": ", "xyz"[k], " is ",
@@ -126,8 +126,8 @@ Mesh parse_off(std::string_view bytes, std::string_view what) {
     const std::string_view count_text = io_detail::next_token(line);
     std::uint64_t n = 0;
     if (!io_detail::parse_uint(count_text, n)) {
-      throw InvalidInput(cat(what, ":", lines.line_no(), ": face ", f, ": bad vertex count ",
-                             quote(count_text)));
+      throw InvalidInput(
+          cat(what, ":", lines.line_no(), ": face ", f, ": bad vertex count ", quote(count_text)));
     }
     poly.clear();
     for (std::uint64_t i = 0; i < n; ++i) {
@@ -138,8 +138,8 @@ Mesh parse_off(std::string_view bytes, std::string_view what) {
                                " indices, its count says ", n));
       }
       if (!io_detail::parse_int(token, index)) {
-        throw InvalidInput(cat(what, ":", lines.line_no(), ": face ", f, ": bad vertex index ",
-                               quote(token)));
+        throw InvalidInput(
+            cat(what, ":", lines.line_no(), ": face ", f, ": bad vertex index ", quote(token)));
       }
       if (index < 0 || static_cast<std::uint64_t>(index) >= nv) {
         throw InvalidInput(cat(what, ":", lines.line_no(), ": face ", f, ": vertex index ", index,

@@ -9,6 +9,8 @@
 #include <bit>
 #include <cstring>
 #include <optional>
+#include <unordered_map>
+#include <unordered_set>
 #include <utility>
 
 #include "csculpt/io.h"
@@ -78,7 +80,9 @@ std::size_t size_of(Scalar s) {
   return 1;
 }
 
-bool is_integer(Scalar s) { return s != Scalar::f32 && s != Scalar::f64; }
+bool is_integer(Scalar s) {
+  return s != Scalar::f32 && s != Scalar::f64;
+}
 
 std::pair<std::int64_t, std::int64_t> integer_range(Scalar s) {
   switch (s) {
@@ -131,24 +135,16 @@ ChannelLayout derive_channels(std::span<const std::string> names, std::span<cons
                               std::string_view what) {
   // name_r/_g[/_b[/_a]] groups: only a prefix of r,g,b,a is a vector; anything else (a lone
   // foo_r, or foo_r with foo_b) stays as separate scalar channels under the full names.
-  std::vector<std::pair<std::string_view, unsigned>> masks;
-  auto mask_of = [&](std::string_view base) -> unsigned {
-    for (const auto& [b, m] : masks) {
-      if (b == base) return m;
-    }
-    return 0;
-  };
+  // Hash maps rather than scans: a hostile header may declare a million properties.
+  std::unordered_map<std::string_view, unsigned> masks;
   for (const std::string& n : names) {
     const int k = suffix_index(n);
-    if (k < 0) continue;
-    const std::string_view base = std::string_view(n).substr(0, n.size() - 2);
-    auto it = std::find_if(masks.begin(), masks.end(), [&](const auto& e) { return e.first == base; });
-    if (it == masks.end()) {
-      masks.emplace_back(base, 0u);
-      it = masks.end() - 1;
-    }
-    it->second |= 1u << k;
+    if (k >= 0) masks[std::string_view(n).substr(0, n.size() - 2)] |= 1u << k;
   }
+  auto mask_of = [&](std::string_view base) -> unsigned {
+    const auto it = masks.find(base);
+    return it == masks.end() ? 0 : it->second;
+  };
   auto group_width = [&](std::string_view base) -> std::uint32_t {
     switch (mask_of(base)) {
       case 0b0011:
@@ -161,12 +157,14 @@ ChannelLayout derive_channels(std::span<const std::string> names, std::span<cons
         return 0;
     }
   };
-  auto has = [&](std::string_view n) { return std::find(names.begin(), names.end(), n) != names.end(); };
+  const std::unordered_set<std::string_view> present(names.begin(), names.end());
+  auto has = [&](std::string_view n) { return present.count(n) != 0; };
   const bool albedo_taken = has("albedo") || group_width("albedo") != 0;
   const bool colour = has("red") && has("green") && has("blue") && !albedo_taken;
 
   ChannelLayout layout;
   std::vector<std::string> sources;  // what defined each channel, to report clashes
+  std::unordered_map<std::string, int> channel_index;
   for (std::size_t i = 0; i < names.size(); ++i) {
     const std::string& n = names[i];
     std::string channel_name = n;
@@ -192,18 +190,17 @@ ChannelLayout derive_channels(std::span<const std::string> names, std::span<cons
       if (types[i] == Scalar::u8) slot.scale = 1.0 / 255.0;
       if (types[i] == Scalar::u16) slot.scale = 1.0 / 65535.0;
     }
-    auto it = std::find_if(layout.channels.begin(), layout.channels.end(),
-                           [&](const ChannelDesc& d) { return d.name == channel_name; });
-    if (it == layout.channels.end()) {
+    const auto [it, inserted] =
+        channel_index.try_emplace(channel_name, static_cast<int>(layout.channels.size()));
+    slot.channel = it->second;
+    if (inserted) {
       layout.channels.push_back({channel_name, width, default_linearisation(channel_name)});
       sources.push_back(source);
-      slot.channel = static_cast<int>(layout.channels.size() - 1);
     } else {
-      slot.channel = static_cast<int>(it - layout.channels.begin());
       if (sources[static_cast<std::size_t>(slot.channel)] != source) {
         throw InvalidInput(cat(what, ": channel ", channel_name, " is defined twice (by property ",
-                               sources[static_cast<std::size_t>(slot.channel)],
-                               " and by property ", n, ")"));
+                               sources[static_cast<std::size_t>(slot.channel)], " and by property ",
+                               n, ")"));
       }
     }
     layout.slots.push_back(slot);
@@ -239,7 +236,8 @@ struct Header {
   std::size_t body_line = 1;  // line number of the first body line (ascii)
 };
 
-[[noreturn]] void header_error(std::string_view what, std::size_t line, const std::string& problem) {
+[[noreturn]] void header_error(std::string_view what, std::size_t line,
+                               const std::string& problem) {
   throw InvalidInput(cat(what, ": header line ", line, ": ", problem));
 }
 
@@ -264,6 +262,9 @@ Header parse_header(std::string_view bytes, std::string_view what) {
   }
   bool have_format = false;
   bool ended = false;
+  // Sets rather than scans: a hostile header may declare a million properties.
+  std::unordered_set<std::string> element_names;
+  std::unordered_set<std::string> property_names;  // of the current element
   while (!ended && next_line(line)) {
     std::string_view rest = line;
     const std::string_view keyword = io_detail::next_token(rest);
@@ -309,9 +310,10 @@ Header parse_header(std::string_view bytes, std::string_view what) {
       if (!io_detail::parse_uint(tokens[1], e.count)) {
         fail(cat("bad element count ", quote(tokens[1])));
       }
-      for (const Element& other : h.elements) {
-        if (other.name == e.name) fail(cat("element ", quote(e.name), " declared twice"));
+      if (!element_names.insert(e.name).second) {
+        fail(cat("element ", quote(e.name), " declared twice"));
       }
+      property_names.clear();
       h.elements.push_back(std::move(e));
     } else if (keyword == "property") {
       if (h.elements.empty()) fail("property before any element");
@@ -337,17 +339,15 @@ Header parse_header(std::string_view bytes, std::string_view what) {
       if (!type) header_error(what, line_no, cat("unknown type ", quote(type_name)));
       p.type = *type;
       Element& e = h.elements.back();
-      for (const Property& other : e.props) {
-        if (other.name == p.name) {
-          fail(cat("property ", quote(p.name), " declared twice in element ", e.name));
-        }
+      if (!property_names.insert(p.name).second) {
+        fail(cat("property ", quote(p.name), " declared twice in element ", e.name));
       }
       e.props.push_back(std::move(p));
     } else if (keyword == "end_header") {
       ended = true;
-    } else {
-      fail(cat("unexpected ", quote(keyword)));
     }
+    // Any other line is ignored like a comment: old Blender exporters wrote a bare
+    // "Created by Blender ..." line into the header.
   }
   if (!ended) throw InvalidInput(cat(what, ": header has no end_header line"));
   if (!have_format) throw InvalidInput(cat(what, ": header has no format line"));
@@ -359,22 +359,24 @@ Header parse_header(std::string_view bytes, std::string_view what) {
 // Checks the header's counts against the bytes that follow, before anything is allocated
 // from them: a 100-byte file claiming 2^31 vertices is rejected here.
 void check_counts(const Header& h, std::size_t body_bytes, std::string_view what) {
-  // ascii: every property needs a token and a separator (the last token may end the file).
-  std::uint64_t remaining = body_bytes + (h.format == Format::ascii ? 1 : 0);
+  std::uint64_t left = body_bytes;
+  // ascii: every property needs a token and a separator, but the last token may end the file.
+  const std::uint64_t slack = h.format == Format::ascii ? 1 : 0;
   for (const Element& e : h.elements) {
     if (e.count == 0) continue;
     if (e.props.empty()) {
-      throw InvalidInput(cat(what, ": element ", e.name, " has ", e.count, " entries but no properties"));
+      throw InvalidInput(
+          cat(what, ": element ", e.name, " has ", e.count, " entries but no properties"));
     }
     std::uint64_t per = 0;
     for (const Property& p : e.props) {
       per += h.format == Format::ascii ? 2 : size_of(p.is_list ? p.count_type : p.type);
     }
-    if (e.count > remaining / per) {
+    if (e.count > (left + slack) / per) {
       throw InvalidInput(cat(what, ": header claims ", e.count, " ", e.name, " elements, but only ",
-                             body_bytes, " bytes of data follow"));
+                             left, " bytes of data are left for them (truncated file?)"));
     }
-    remaining -= e.count * per;
+    left -= std::min(left, e.count * per);
   }
 }
 
@@ -422,18 +424,26 @@ class AsciiCursor {
     return d;
   }
 
-  void skip(Scalar /*type*/, std::uint64_t n, const Where& w) {
+  void skip(Scalar type, std::uint64_t n, const Where& w) {
+    need_list(n, type, w);
     for (std::uint64_t i = 0; i < n; ++i) next(w);
   }
 
   // Each list entry needs at least two bytes of text.
-  bool can_hold(std::uint64_t n, Scalar /*type*/) const { return n <= rest_.size() / 2 + 1; }
+  void need_list(std::uint64_t n, Scalar /*type*/, const Where& w) const {
+    if (n > rest_.size() / 2 + 1) {
+      throw InvalidInput(cat(location(), ": ", w.element->name, " ", w.index, ": list ",
+                             w.property->name, " claims ", n,
+                             " entries, more than the rest of the file holds"));
+    }
+  }
 
   void finish() {
+    std::string_view rest = rest_;
     skip_space();
-    if (!rest_.empty()) {
-      throw InvalidInput(cat(location(), ": unexpected data after the last element: ",
-                             quote(rest_.substr(0, std::min<std::size_t>(rest_.size(), 20)))));
+    if (const std::string_view token = io_detail::next_token(rest); !token.empty()) {
+      throw InvalidInput(
+          cat(location(), ": unexpected data after the last element: ", quote(token)));
     }
   }
 
@@ -462,8 +472,7 @@ class AsciiCursor {
 
   [[noreturn]] void bad(std::string_view token, Scalar type, const Where& w) const {
     throw InvalidInput(cat(location(), ": ", w.element->name, " ", w.index, ": property ",
-                           w.property->name, ": expected ", name_of(type), ", got ",
-                           quote(token)));
+                           w.property->name, ": expected ", name_of(type), ", got ", quote(token)));
   }
 
   std::string_view rest_;
@@ -509,16 +518,19 @@ class BinaryCursor {
   }
 
   void skip(Scalar type, std::uint64_t n, const Where& w) {
-    if (!can_hold(n, type)) truncated(w);
+    need_list(n, type, w);
     rest_.remove_prefix(static_cast<std::size_t>(n) * size_of(type));
   }
 
-  bool can_hold(std::uint64_t n, Scalar type) const { return n <= rest_.size() / size_of(type); }
+  void need_list(std::uint64_t n, Scalar type, const Where& w) const {
+    if (n > rest_.size() / size_of(type)) truncated(w);
+  }
 
   void finish() {
     // Tolerate a trailing newline some writers add; anything else means the counts are wrong.
     if (!io_detail::trim(rest_).empty()) {
-      throw InvalidInput(cat(what_, ": ", rest_.size(), " bytes of unexpected data after the last element"));
+      throw InvalidInput(
+          cat(what_, ": ", rest_.size(), " bytes of unexpected data after the last element"));
     }
   }
 
@@ -555,7 +567,7 @@ void assign_roles(Header& h, Mesh& mesh, std::string_view what) {
         }
       }
       for (int axis = 0; axis < 3; ++axis) {
-        if (!have[axis]) {
+        if (!have[axis] && e.count > 0) {
           throw InvalidInput(cat(what, ": vertex element has no property ", "xyz"[axis]));
         }
       }
@@ -564,9 +576,11 @@ void assign_roles(Header& h, Mesh& mesh, std::string_view what) {
         channel_props[i]->role = layout.slots[i].channel >= 0 ? Role::channel : Role::skip;
         channel_props[i]->slot = layout.slots[i];
       }
+      std::unordered_map<std::string_view, Linearisation> declared;
+      for (const auto& [name, lin] : h.linearisations) declared[name] = lin;  // last one wins
       for (ChannelDesc& d : layout.channels) {
-        for (const auto& [name, lin] : h.linearisations) {
-          if (name == d.name) d.linearisation = lin;
+        if (const auto it = declared.find(d.name); it != declared.end()) {
+          d.linearisation = it->second;
         }
         Channel c;
         c.desc = d;
@@ -614,10 +628,7 @@ void read_body(Cursor& cur, const Header& h, Mesh& mesh) {
             cur.skip(p.type, n, w);
             continue;
           }
-          if (!cur.can_hold(n, p.type)) {
-            throw InvalidInput(cat(cur.location(), ": face ", w.index, " claims ", n,
-                                   " vertices, more than the rest of the file holds"));
-          }
+          cur.need_list(n, p.type, w);
           poly.clear();
           for (std::uint64_t i = 0; i < n; ++i) {
             const double index = cur.read(p.type, w);
@@ -685,7 +696,9 @@ void put_u32_le(std::string& out, std::uint32_t v) {
   out.append(bytes, 4);
 }
 
-void put_f32_le(std::string& out, float f) { put_u32_le(out, std::bit_cast<std::uint32_t>(f)); }
+void put_f32_le(std::string& out, float f) {
+  put_u32_le(out, std::bit_cast<std::uint32_t>(f));
+}
 
 }  // namespace
 
@@ -700,7 +713,8 @@ Mesh parse_ply(std::string_view bytes, std::string_view what) {
   for (const Element& e : h.elements) {
     if (e.name == "vertex") {
       if (e.count > std::numeric_limits<std::uint32_t>::max()) {
-        throw InvalidInput(cat(what, ": ", e.count, " vertices is more than 32-bit indices can address"));
+        throw InvalidInput(
+            cat(what, ": ", e.count, " vertices is more than 32-bit indices can address"));
       }
       const auto n = static_cast<std::size_t>(e.count);
       mesh.positions.resize(n);
@@ -734,13 +748,15 @@ std::string encode_ply(const Mesh& mesh, std::string_view what) {
   std::vector<std::string> names;
   for (const Channel& c : mesh.channels) {
     if (!valid_property_name(c.desc.name)) {
-      throw InvalidInput(cat(what, ": channel name ", quote(c.desc.name),
-                             " cannot be a PLY property name (empty, spaces or control characters)"));
+      throw InvalidInput(
+          cat(what, ": channel name ", quote(c.desc.name),
+              " cannot be a PLY property name (empty, spaces or control characters)"));
     }
     if (c.desc.width == 1) {
       names.push_back(c.desc.name);
     } else {
-      for (std::uint32_t k = 0; k < c.desc.width; ++k) names.push_back(c.desc.name + std::string(kSuffixes[k]));
+      for (std::uint32_t k = 0; k < c.desc.width; ++k)
+        names.push_back(c.desc.name + std::string(kSuffixes[k]));
     }
   }
   for (const std::string& n : names) {
@@ -758,8 +774,10 @@ std::string encode_ply(const Mesh& mesh, std::string_view what) {
   if (!same) {
     std::string read_back;
     for (const ChannelDesc& d : layout.channels) read_back += cat(" ", d.name, "(", d.width, ")");
-    throw InvalidInput(cat(what, ": these channel names would not read back as the same channels"
-                                 " from PLY; they would read as:", read_back));
+    throw InvalidInput(cat(what,
+                           ": these channel names would not read back as the same channels"
+                           " from PLY; they would read as:",
+                           read_back));
   }
 
   std::string header = "ply\nformat binary_little_endian 1.0\ncomment written by csculpt\n";
@@ -776,7 +794,8 @@ std::string encode_ply(const Mesh& mesh, std::string_view what) {
   header += "property list uchar int vertex_indices\nend_header\n";
 
   std::string out;
-  out.reserve(header.size() + mesh.vertex_count() * (3 + names.size()) * 4 + mesh.face_count() * 13);
+  out.reserve(header.size() + mesh.vertex_count() * (3 + names.size()) * 4 +
+              mesh.face_count() * 13);
   out += header;
   for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
     const Vec3f& p = mesh.positions[v];
@@ -784,7 +803,8 @@ std::string encode_ply(const Mesh& mesh, std::string_view what) {
     put_f32_le(out, p.y);
     put_f32_le(out, p.z);
     for (const Channel& c : mesh.channels) {
-      for (std::uint32_t k = 0; k < c.desc.width; ++k) put_f32_le(out, c.values[v * c.desc.width + k]);
+      for (std::uint32_t k = 0; k < c.desc.width; ++k)
+        put_f32_le(out, c.values[v * c.desc.width + k]);
     }
   }
   for (const Triangle& t : mesh.triangles) {

@@ -1,6 +1,7 @@
 // STL, binary and ascii. STL stores each facet's corners separately; corners with exactly
 // equal coordinates are welded (in order of first occurrence, so the result is deterministic)
 // to recover the shared vertices a merge needs.
+#include <array>
 #include <bit>
 #include <cmath>
 #include <unordered_map>
@@ -31,24 +32,46 @@ struct KeyHash {
   }
 };
 
+// Welds corners with bitwise-equal coordinates and adds facets as triangles.
 class Welder {
  public:
-  explicit Welder(Mesh& mesh, std::size_t expected_corners) : mesh_(mesh) {
-    index_.reserve(expected_corners / 4);
+  explicit Welder(Mesh& mesh, std::size_t expected_facets) : mesh_(mesh) {
+    index_.reserve(expected_facets / 2);
+    mesh_.triangles.reserve(expected_facets);
   }
 
-  std::uint32_t add(const Vec3f& p) {
-    // +0.0f turns -0 into +0 so that the two zeros, which compare equal, weld together.
-    const Key key{{std::bit_cast<std::uint32_t>(p.x + 0.0f), std::bit_cast<std::uint32_t>(p.y + 0.0f),
-                   std::bit_cast<std::uint32_t>(p.z + 0.0f)}};
-    const auto [it, inserted] = index_.try_emplace(key, static_cast<std::uint32_t>(mesh_.positions.size()));
-    if (inserted) mesh_.positions.push_back(p);
-    return it->second;
+  // A facet with two equal corners has zero area and no orientation; STL exporters emit such
+  // slivers routinely (the Spider model has some), and as STL has no connectivity nothing
+  // refers to them. They are dropped before welding so they leave no stray vertex behind.
+  void add_facet(const std::array<Vec3f, 3>& corners) {
+    std::array<Key, 3> keys;
+    for (std::size_t c = 0; c < 3; ++c) keys[c] = key_of(corners[c]);
+    if (keys[0] == keys[1] || keys[1] == keys[2] || keys[0] == keys[2]) {
+      ++dropped_;
+      return;
+    }
+    Triangle t;
+    for (std::size_t c = 0; c < 3; ++c) {
+      const auto [it, inserted] =
+          index_.try_emplace(keys[c], static_cast<std::uint32_t>(mesh_.positions.size()));
+      if (inserted) mesh_.positions.push_back(corners[c]);
+      t[c] = it->second;
+    }
+    mesh_.triangles.push_back(t);
   }
+
+  std::size_t dropped() const { return dropped_; }
 
  private:
+  static Key key_of(const Vec3f& p) {
+    // +0.0f turns -0 into +0 so that the two zeros, which compare equal, weld together.
+    return Key{{std::bit_cast<std::uint32_t>(p.x + 0.0f), std::bit_cast<std::uint32_t>(p.y + 0.0f),
+                std::bit_cast<std::uint32_t>(p.z + 0.0f)}};
+  }
+
   Mesh& mesh_;
   std::unordered_map<Key, std::uint32_t, KeyHash> index_;
+  std::size_t dropped_ = 0;
 };
 
 float load_f32_le(const unsigned char* p) {
@@ -66,27 +89,20 @@ void check_finite(const Vec3f& p, std::string_view where) {
   }
 }
 
-void add_facet(Mesh& mesh, std::span<const std::uint32_t> corners, const std::string& where) {
-  const std::string problem = io_detail::append_fan(corners, mesh.triangles);
-  if (!problem.empty()) throw InvalidInput(cat(where, " ", problem));
-}
-
 Mesh parse_binary(std::string_view bytes, std::uint64_t count, std::string_view what) {
   Mesh mesh;
   const auto n = static_cast<std::size_t>(count);
-  mesh.triangles.reserve(n);
-  Welder welder(mesh, 3 * n);
+  Welder welder(mesh, n);
   const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
   for (std::size_t f = 0; f < n; ++f) {
     const unsigned char* facet = data + 84 + 50 * f + 12;  // skip the normal
-    std::uint32_t corners[3];
+    std::array<Vec3f, 3> corners;
     for (std::size_t c = 0; c < 3; ++c) {
       const unsigned char* v = facet + 12 * c;
-      const Vec3f p{load_f32_le(v), load_f32_le(v + 4), load_f32_le(v + 8)};
-      check_finite(p, cat(what, ": facet ", f, ": vertex ", c));
-      corners[c] = welder.add(p);
+      corners[c] = {load_f32_le(v), load_f32_le(v + 4), load_f32_le(v + 8)};
+      check_finite(corners[c], cat(what, ": facet ", f, ": vertex ", c));
     }
-    add_facet(mesh, corners, cat(what, ": facet ", f));
+    welder.add_facet(corners);
   }
   return mesh;
 }
@@ -153,9 +169,8 @@ class Lexer {
 Mesh parse_ascii(std::string_view bytes, std::string_view what) {
   Mesh mesh;
   // An ascii facet takes well over 100 bytes; this bounds the reservation by the file size.
-  Welder welder(mesh, bytes.size() / 40);
+  Welder welder(mesh, bytes.size() / 128);
   Lexer lex(bytes, what);
-  std::vector<std::uint32_t> corners;
   std::size_t facet = 0;
   for (std::string_view token = lex.next(); !token.empty(); token = lex.next()) {
     if (token.size() < 5 || !equals_ci(token.substr(0, 5), "solid")) {
@@ -177,21 +192,30 @@ Mesh parse_ascii(std::string_view bytes, std::string_view what) {
       for (int k = 0; k < 3; ++k) lex.next();
       lex.expect("outer");
       lex.expect("loop");
-      corners.clear();
+      std::array<Vec3f, 3> corners;
+      std::size_t count = 0;
       for (token = lex.next(); equals_ci(token, "vertex"); token = lex.next()) {
         Vec3f p;
         p.x = lex.number();
         p.y = lex.number();
         p.z = lex.number();
         check_finite(p, cat(lex.where(), ": facet ", facet));
-        corners.push_back(welder.add(p));
+        if (count == 3) {
+          throw InvalidInput(cat(lex.where(), ": facet ", facet,
+                                 " has more than 3 vertices (STL facets are triangles)"));
+        }
+        corners[count++] = p;
       }
       if (!equals_ci(token, "endloop")) {
         throw InvalidInput(cat(lex.where(), ": expected 'vertex' or 'endloop', got ",
                                token.empty() ? std::string("end of file") : quote(token)));
       }
+      if (count != 3) {
+        throw InvalidInput(cat(lex.where(), ": facet ", facet, " has ", count,
+                               " vertices (STL facets are triangles)"));
+      }
       lex.expect("endfacet");
-      add_facet(mesh, corners, cat(lex.where(), ": facet ", facet));
+      welder.add_facet(corners);
       ++facet;
     }
   }
@@ -219,7 +243,8 @@ Mesh parse_stl(std::string_view bytes, std::string_view what) {
     throw InvalidInput(cat(what, ": binary STL header claims ", count, " facets (", 84 + 50 * count,
                            " bytes) but the file has ", bytes.size(), " bytes"));
   } else {
-    throw InvalidInput(cat(what, ": not an STL file (too short for binary STL and does not start with 'solid')"));
+    throw InvalidInput(
+        cat(what, ": not an STL file (too short for binary STL and does not start with 'solid')"));
   }
   validate(mesh, what);
   return mesh;

@@ -28,8 +28,9 @@ double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-constexpr std::array<MergeMethod, 7> kMethods = {
+constexpr std::array<MergeMethod, 8> kMethods = {
     MergeMethod::full,
+    MergeMethod::paper_blend,
     MergeMethod::single_parent,
     MergeMethod::single_level_isometry,
     MergeMethod::multiscale_translation,
@@ -72,6 +73,15 @@ struct DqOps {
     return canonical(normalized(acc));
   }
   static bool is_identity(const Value& q) { return q == identity(); }
+  /// 1 + sum of offsets (q - 1), as accumulated by add_offset into a zero value
+  static Value compose_offsets(Value acc) {
+    acc.real.w += 1.f;
+    return canonical(normalized(acc));
+  }
+  static float distance(const Value& a, const Value& b) {
+    const Quat dr = a.real - b.real, dd = a.dual - b.dual;
+    return std::sqrt(dot(dr, dr) + dot(dd, dd));
+  }
 };
 
 /// How translations of several diffs combine at a node.
@@ -130,6 +140,12 @@ struct VecOps {
     }
   }
   static bool is_identity(const Value& q) { return q == identity(); }
+  static Value compose_offsets(const Value& acc) { return acc; }
+  static float distance(const Value& a, const Value& b) {
+    float d2 = 0;
+    for (int i = 0; i < 4; ++i) d2 += (a.v[i] - b.v[i]) * (a.v[i] - b.v[i]);
+    return std::sqrt(d2);
+  }
 };
 
 // ---------------------------------------------------------------------------------------
@@ -239,10 +255,59 @@ typename Ops::Value parent_value(const ParentLinks& links, std::size_t level,
 
 /// Residuals of every diff at each needed node, blended by magnitude, recomposed from the
 /// coarsest level down. Fills merged.levels[0] for the nodes in merged.levels[0].list.
+/// How the residuals of several diffs at one node combine.
+///  - magnitude: the paper's operator, normalize(sum_j m_j q_j) with m = |q - 1|. It
+///    treats every residual at a node as one shared intent, so two edits of different scale
+///    that both leave residuals at a node each lose part of theirs.
+///  - intent: the same magnitude-weighted sum, but each residual's weight is divided by the
+///    (magnitude-weighted, soft) count of residuals at that node that express the same
+///    intent, s_jk = max(0, 1 - |d_j - d_k| / max(|d_j|, |d_k|))^2 with d = q - 1. Identical
+///    residuals blend (idempotence), independent ones add (so a detail and the fine
+///    residual of a large edit both survive), a null residual changes nothing (identity);
+///    symmetric and continuous. With s = 1 everywhere it is the paper's operator.
+enum class NodeBlend { magnitude, intent };
+
+/// Largest number of diffs merged at once (the per-node scratch lives on the stack).
+constexpr std::size_t kMaxDiffs = 64;
+
+template <class Ops>
+typename Ops::Value blend_residuals(NodeBlend rule, const typename Ops::Value* r,
+                                    const float* m, std::size_t n, std::uint32_t users) {
+  typename Ops::Value acc = Ops::zero();
+  float magnitude_sum = 0;
+  if (rule == NodeBlend::magnitude) {
+    for (std::size_t j = 0; j < n; ++j) {
+      Ops::add(acc, m[j], r[j]);
+      magnitude_sum += m[j];
+    }
+    return Ops::finish_blend(acc, magnitude_sum, users);
+  }
+  // intent: acc = sum_j c_j (r_j - 1) with c_j = m_j / sum_k s_jk m_k
+  for (std::size_t j = 0; j < n; ++j) {
+    if (!(m[j] > 0)) continue;
+    float same = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      if (!(m[k] > 0)) continue;
+      const float closeness =
+          k == j ? 1.f : std::max(0.f, 1.f - Ops::distance(r[j], r[k]) / std::max(m[j], m[k]));
+      const float s = closeness * closeness;
+      same += s * m[k];
+    }
+    Ops::add_offset(acc, m[j] / same, r[j]);
+    magnitude_sum += m[j];
+  }
+  if (!(magnitude_sum > 0)) return Ops::identity();
+  return Ops::compose_offsets(acc);
+}
+
+/// Residuals of every diff at each needed node, blended per node, recomposed from the
+/// coarsest level down (paper §3.1 "Final Merged Mesh"). Fills merged.levels[0] for the
+/// nodes listed there.
 template <class Ops>
 void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
                            std::span<SparsePyramid<typename Ops::Value>> users,
-                           SparsePyramid<typename Ops::Value>& merged, std::uint32_t epoch) {
+                           SparsePyramid<typename Ops::Value>& merged, std::uint32_t epoch,
+                           NodeBlend rule) {
   using Value = typename Ops::Value;
   // The nodes the result needs: ancestors of the vertices some diff changed.
   for (std::size_t i = 0; i + 1 < level_count; ++i) {
@@ -253,28 +318,25 @@ void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
     }
   }
   const auto user_count = static_cast<std::uint32_t>(users.size());
+  Value residuals[kMaxDiffs];
+  float magnitudes[kMaxDiffs];
   for (std::size_t level = level_count; level-- > 0;) {
     SparseLevel<Value>& out = merged.levels[level];
+    const bool has_parents = level + 1 < level_count;
     for (std::uint32_t c : out.list) {
-      Value blend = Ops::zero();
-      float magnitude_sum = 0;
-      for (auto& user : users) {
-        const SparseLevel<Value>& ul = user.levels[level];
+      for (std::size_t j = 0; j < users.size(); ++j) {
+        const SparseLevel<Value>& ul = users[j].levels[level];
         const Value q = ul.has(c, epoch) ? ul.value[c] : Ops::identity();
         const Value parent =
-            level + 1 < level_count
-                ? parent_value<Ops>(links, level, level_count, c, user.levels[level + 1], epoch)
-                : Ops::identity();
-        const Value r = Ops::residual(parent, q);
-        const float m = Ops::magnitude(r);
-        Ops::add(blend, m, r);
-        magnitude_sum += m;
+            has_parents ? parent_value<Ops>(links, level, level_count, c, users[j].levels[level + 1], epoch)
+                        : Ops::identity();
+        residuals[j] = Ops::residual(parent, q);
+        magnitudes[j] = Ops::magnitude(residuals[j]);
       }
-      const Value residual = Ops::finish_blend(blend, magnitude_sum, user_count);
+      const Value residual = blend_residuals<Ops>(rule, residuals, magnitudes, users.size(), user_count);
       const Value parent =
-          level + 1 < level_count
-              ? parent_value<Ops>(links, level, level_count, c, merged.levels[level + 1], epoch)
-              : Ops::identity();
+          has_parents ? parent_value<Ops>(links, level, level_count, c, merged.levels[level + 1], epoch)
+                      : Ops::identity();
       out.value[c] = Ops::compose(parent, residual);
     }
   }
@@ -285,17 +347,19 @@ struct MethodTraits {
   bool multiscale;      // use the hierarchy
   bool tree;            // K = 1
   TranslationBlend blend;
+  NodeBlend node_blend;  // for positions; channels always blend by magnitude
 };
 
 MethodTraits traits(MergeMethod m) {
   switch (m) {
-    case MergeMethod::full: return {true, true, false, TranslationBlend::magnitude};
-    case MergeMethod::single_parent: return {true, true, true, TranslationBlend::magnitude};
-    case MergeMethod::single_level_isometry: return {true, false, false, TranslationBlend::magnitude};
-    case MergeMethod::multiscale_translation: return {false, true, false, TranslationBlend::magnitude};
-    case MergeMethod::weighted_translation: return {false, false, false, TranslationBlend::magnitude};
-    case MergeMethod::average: return {false, false, false, TranslationBlend::average};
-    case MergeMethod::sum: return {false, false, false, TranslationBlend::sum};
+    case MergeMethod::full: return {true, true, false, TranslationBlend::magnitude, NodeBlend::intent};
+    case MergeMethod::single_parent: return {true, true, true, TranslationBlend::magnitude, NodeBlend::intent};
+    case MergeMethod::single_level_isometry: return {true, false, false, TranslationBlend::magnitude, NodeBlend::intent};
+    case MergeMethod::multiscale_translation: return {false, true, false, TranslationBlend::magnitude, NodeBlend::intent};
+    case MergeMethod::weighted_translation: return {false, false, false, TranslationBlend::magnitude, NodeBlend::magnitude};
+    case MergeMethod::average: return {false, false, false, TranslationBlend::average, NodeBlend::magnitude};
+    case MergeMethod::sum: return {false, false, false, TranslationBlend::sum, NodeBlend::magnitude};
+    case MergeMethod::paper_blend: return {true, true, false, TranslationBlend::magnitude, NodeBlend::magnitude};
   }
   throw InvalidInput("unknown merge method " + std::to_string(static_cast<std::uint32_t>(m)));
 }
@@ -482,7 +546,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
       for (std::uint32_t u = 0; u < users; ++u)
         for (std::uint32_t v : diffs[order[u]].positions.indices) ws.dq_merged.levels[0].mark(v, epoch);
       blend_and_reconstruct<DqOps>(links, level_count, std::span(ws.dq_users.data(), users),
-                                   ws.dq_merged, epoch);
+                                   ws.dq_merged, epoch, t.node_blend);
       timings_.blend_ms += ms_since(t0);
       count_work(ws.dq_users, users, ws.dq_merged, level_count, sizeof(DualQuat));
       t0 = Clock::now();
@@ -527,7 +591,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
           for (std::uint32_t v : diffs[order[u]].positions.indices) out.levels[0].mark(v, epoch);
         blend_and_reconstruct<Ops>(
             links, level_count,
-            std::span(ws.vec_users.data(), users), out, epoch);
+            std::span(ws.vec_users.data(), users), out, epoch, t.node_blend);
         timings_.blend_ms += ms_since(t0);
         count_work(ws.vec_users, users, ws.vec_merged, level_count, sizeof(Vec4));
         t0 = Clock::now();
@@ -585,7 +649,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
         decompose<Ops>(links, level_count, pyramid(ws.vec_users[u]), epoch);
       blend_and_reconstruct<Ops>(
           links, level_count,
-          std::span(ws.vec_users.data(), users), out, epoch);
+          std::span(ws.vec_users.data(), users), out, epoch, NodeBlend::magnitude);
       auto& list = out.levels[0].list;
       std::sort(list.begin(), list.end());
       for (std::uint32_t v : list) {
@@ -634,6 +698,7 @@ std::string_view to_string(MergeMethod method) {
     case MergeMethod::weighted_translation: return "weighted-translation";
     case MergeMethod::average: return "average";
     case MergeMethod::sum: return "sum";
+    case MergeMethod::paper_blend: return "paper-blend";
   }
   return "unknown";
 }

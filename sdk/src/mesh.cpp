@@ -5,6 +5,7 @@
 #include <limits>
 #include <sstream>
 #include <string>
+#include <unordered_set>
 
 #include "csculpt/error.h"
 
@@ -141,7 +142,8 @@ int Mesh::add_channel(const ChannelDesc& desc, std::span<const float> fill) {
   c.values.resize(vertex_count() * desc.width, 0.f);
   if (!fill.empty()) {
     for (std::size_t v = 0; v < vertex_count(); ++v) {
-      std::copy(fill.begin(), fill.end(), c.values.begin() + static_cast<std::ptrdiff_t>(v * desc.width));
+      std::copy(fill.begin(), fill.end(),
+                c.values.begin() + static_cast<std::ptrdiff_t>(v * desc.width));
     }
   }
   channels.push_back(std::move(c));
@@ -162,8 +164,8 @@ void validate(const Mesh& mesh, std::string_view what) {
     const float xyz[3] = {p.x, p.y, p.z};
     for (int k = 0; k < 3; ++k) {
       if (!std::isfinite(xyz[k])) {
-        throw InvalidInput(cat(what, ": vertex ", v, ": position ", "xyz"[k], " is ",
-                               non_finite_name(xyz[k])));
+        throw InvalidInput(
+            cat(what, ": vertex ", v, ": position ", "xyz"[k], " is ", non_finite_name(xyz[k])));
       }
     }
   }
@@ -171,8 +173,8 @@ void validate(const Mesh& mesh, std::string_view what) {
     const Triangle& tri = mesh.triangles[t];
     for (std::uint32_t i : tri) {
       if (i >= n) {
-        throw InvalidInput(cat(what, ": triangle ", t, ": vertex index ", i, " out of range (", n,
-                               " vertices)"));
+        throw InvalidInput(
+            cat(what, ": triangle ", t, ": vertex index ", i, " out of range (", n, " vertices)"));
       }
     }
     if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) {
@@ -181,14 +183,13 @@ void validate(const Mesh& mesh, std::string_view what) {
                              ") repeats vertex ", repeated));
     }
   }
+  std::unordered_set<std::string_view> names;
   for (std::size_t c = 0; c < mesh.channels.size(); ++c) {
     const Channel& ch = mesh.channels[c];
     const ChannelDesc& d = ch.desc;
     if (d.name.empty()) throw InvalidInput(cat(what, ": channel ", c, " has an empty name"));
-    for (std::size_t o = 0; o < c; ++o) {
-      if (mesh.channels[o].desc.name == d.name) {
-        throw InvalidInput(cat(what, ": channel ", d.name, " appears twice"));
-      }
+    if (!names.insert(d.name).second) {
+      throw InvalidInput(cat(what, ": channel ", d.name, " appears twice"));
     }
     if (d.width < 1 || d.width > 4) {
       throw InvalidInput(
@@ -217,8 +218,8 @@ void check_same_connectivity(const Mesh& base, const Mesh& edited, std::string_v
                            base.vertex_count()));
   }
   if (edited.face_count() != base.face_count()) {
-    throw InvalidInput(cat(what, ": ", edited.face_count(), " triangles, but the base has ",
-                           base.face_count()));
+    throw InvalidInput(
+        cat(what, ": ", edited.face_count(), " triangles, but the base has ", base.face_count()));
   }
   for (std::size_t t = 0; t < base.triangles.size(); ++t) {
     const Triangle& a = edited.triangles[t];
@@ -236,8 +237,8 @@ void check_same_connectivity(const Mesh& base, const Mesh& edited, std::string_v
     const ChannelDesc& a = edited.channels[c].desc;
     const ChannelDesc& b = base.channels[c].desc;
     if (!(a == b)) {
-      throw InvalidInput(cat(what, ": channel ", c, " is ", describe(a),
-                             " but in the base it is ", describe(b)));
+      throw InvalidInput(
+          cat(what, ": channel ", c, " is ", describe(a), " but in the base it is ", describe(b)));
     }
   }
 }

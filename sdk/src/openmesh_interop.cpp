@@ -59,8 +59,8 @@ void import_channel(const OpenMeshTriMesh& om, Channel& channel) {
   OpenMesh::VPropHandleT<T> handle;
   if (!om.get_property_handle(handle, channel.desc.name)) {
     throw InvalidInput(cat("from_openmesh: no vertex property '", channel.desc.name, "' of type ",
-                           PropertyType<W>::name, " for channel ", channel.desc.name, " (width ",
-                           W, ")"));
+                           PropertyType<W>::name, " for channel ", channel.desc.name, " (width ", W,
+                           ")"));
   }
   channel.values.resize(om.n_vertices() * W);
   for (std::size_t v = 0; v < om.n_vertices(); ++v) {

@@ -39,10 +39,13 @@ inline bool face_rotation_kernel(const Vec3f& a0, const Vec3f& a1, const Vec3f& 
   const D3 e0a = sub(a1, a0), e1a = sub(a2, a0), e0b = sub(b1, b0), e1b = sub(b2, b0);
   const D3 ca = cross(e0a, e1a), cb = cross(e0b, e1b);
   const double da2 = norm2(ca), db2 = norm2(cb);
-  // Degenerate (zero-area) before or after: no usable frame, no rotation from this face.
-  const double tol = 1e-24;
-  if (!(da2 > tol * (norm2(e0a) + norm2(e1a)) * (norm2(e0a) + norm2(e1a)))) return false;
-  if (!(db2 > tol * (norm2(e0b) + norm2(e1b)) * (norm2(e0b) + norm2(e1b)))) return false;
+  // Degenerate before or after: no usable frame, no rotation from this face. A triangle
+  // flattened in float arithmetic keeps a cross product of rounding noise (sin of its
+  // angles ~1e-7), whose normal would be arbitrary, so the bound sits well above float
+  // resolution: sin(angle between the edges) > 1e-5.
+  const double tol = 1e-10;
+  if (!(da2 > tol * norm2(e0a) * norm2(e1a))) return false;
+  if (!(db2 > tol * norm2(e0b) * norm2(e1b))) return false;
   const double da = std::sqrt(da2), db = std::sqrt(db2);
   const D3 na{ca.x / da, ca.y / da, ca.z / da};
   const D3 nb{cb.x / db, cb.y / db, cb.z / db};

@@ -22,8 +22,8 @@ namespace csculpt::test {
 inline Mesh make_icosphere(int subdivisions) {
   const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
   Mesh mesh;
-  mesh.positions = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                    {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  mesh.positions = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                    {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
   mesh.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
                     {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
                     {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
@@ -71,8 +71,8 @@ inline Mesh make_grid(int n) {
   const auto m = static_cast<std::uint32_t>(n);
   for (std::uint32_t j = 0; j <= m; ++j) {
     for (std::uint32_t i = 0; i <= m; ++i) {
-      mesh.positions.push_back(
-          {static_cast<float>(i) / static_cast<float>(m), static_cast<float>(j) / static_cast<float>(m), 0.f});
+      mesh.positions.push_back({static_cast<float>(i) / static_cast<float>(m),
+                                static_cast<float>(j) / static_cast<float>(m), 0.f});
     }
   }
   auto at = [m](std::uint32_t i, std::uint32_t j) { return j * (m + 1) + i; };
@@ -128,8 +128,8 @@ inline std::string first_difference(const Mesh& a, const Mesh& b) {
   for (std::size_t t = 0; t < a.face_count(); ++t) {
     if (a.triangles[t] != b.triangles[t]) {
       out << "triangle " << t << ": (" << a.triangles[t][0] << ", " << a.triangles[t][1] << ", "
-          << a.triangles[t][2] << ") vs (" << b.triangles[t][0] << ", " << b.triangles[t][1]
-          << ", " << b.triangles[t][2] << ")";
+          << a.triangles[t][2] << ") vs (" << b.triangles[t][0] << ", " << b.triangles[t][1] << ", "
+          << b.triangles[t][2] << ")";
       return out.str();
     }
   }
@@ -142,8 +142,8 @@ inline std::string first_difference(const Mesh& a, const Mesh& b) {
     const Channel& y = b.channels[c];
     if (!(x.desc == y.desc)) {
       out << "channel " << c << ": " << x.desc.name << "/" << x.desc.width << "/"
-          << to_string(x.desc.linearisation) << " vs " << y.desc.name << "/" << y.desc.width
-          << "/" << to_string(y.desc.linearisation);
+          << to_string(x.desc.linearisation) << " vs " << y.desc.name << "/" << y.desc.width << "/"
+          << to_string(y.desc.linearisation);
       return out.str();
     }
     if (x.values.size() != y.values.size()) {

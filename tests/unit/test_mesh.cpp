@@ -304,7 +304,8 @@ Mesh sphere_with_channels() {
       m.channels[static_cast<std::size_t>(uv)].values[2 * v + k] = static_cast<float>(v + k) / 7.f;
     }
     for (std::size_t k = 0; k < 4; ++k) {
-      m.channels[static_cast<std::size_t>(tint)].values[4 * v + k] = static_cast<float>(v * k) / 3.f;
+      m.channels[static_cast<std::size_t>(tint)].values[4 * v + k] =
+          static_cast<float>(v * k) / 3.f;
     }
   }
   return m;
@@ -348,7 +349,6 @@ TEST(OpenMeshInterop, ExplicitChannelsKeepTheirLinearisation) {
 TEST(OpenMeshInterop, IgnoresOpenMeshsOwnAndNonPersistentProperties) {
   OpenMeshTriMesh om = to_openmesh(make_grid(2));
   om.request_vertex_normals();
-  om.request_vertex_colors();
   OpenMesh::VPropHandleT<float> scratch;
   om.add_property(scratch, "scratch");
   EXPECT_TRUE(from_openmesh(om).channels.empty());

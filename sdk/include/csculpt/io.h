@@ -15,10 +15,21 @@ namespace csculpt {
 /// `name_r/_g/_b/_a` (width 2..4); colour `red/green/blue` becomes albedo.
 /// Throws IoError (cannot open) or InvalidInput (malformed; the message names the file,
 /// the line or element and the problem). Never returns a mesh that fails validate().
+///
+/// Details: files over 2 GiB are refused; a file without a known extension is recognised by
+/// its contents. PLY: an `alpha` next to red/green/blue is dropped (albedo is RGB); channel
+/// linearisations follow default_linearisation() unless a header line
+/// `comment csculpt linearisation <channel> <identity|square|srgb>` says otherwise (the writer
+/// adds one when needed); unknown header lines are ignored like comments. STL: corners with
+/// bitwise-equal coordinates are welded in order of first occurrence, and zero-area facets
+/// (two equal corners) are dropped, as STL exporters emit them routinely.
 Mesh read_mesh(const std::string& path);
 
 /// Writes .ply (binary little-endian, channels as float properties) or .obj (positions and
 /// faces only). Writes to a temporary file and renames it, so a failure leaves no partial file.
+/// Throws InvalidInput if the mesh fails validate() or its channel names would not read back
+/// as the same channels from PLY (e.g. width-1 channels "red", "green", "blue"), IoError if
+/// the file cannot be written. Reading a written PLY gives back a bit-identical mesh.
 void write_mesh(const Mesh& mesh, const std::string& path);
 
 /// Parses PLY bytes held in memory (what read_mesh does for .ply); `what` names the source

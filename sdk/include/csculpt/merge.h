@@ -18,13 +18,17 @@ namespace csculpt {
 
 /// The paper's algorithm and the variants it is compared with (Fig. 3, Fig. 5).
 enum class MergeMethod : std::uint32_t {
-  full = 0,                   ///< isometries, multiscale, K blended parents
+  /// isometries, multiscale, K blended parents; residuals blended per node by magnitude and
+  /// counted once per intent (identical ones blend, independent ones add)
+  full = 0,
   single_parent = 1,          ///< isometries, multiscale, a tree (K = 1)
   single_level_isometry = 2,  ///< isometries blended per vertex, no hierarchy
   multiscale_translation = 3, ///< translations, multiscale, K parents (no rotation)
   weighted_translation = 4,   ///< translations blended per vertex by magnitude (paper eq. 1)
   average = 5,                ///< mean of the translations
   sum = 6,                    ///< sum of the translations
+  /// `full` with the paper's node blend exactly: normalize(sum_j |q_j - 1| q_j)
+  paper_blend = 7,
 };
 
 std::string_view to_string(MergeMethod method);
