@@ -194,7 +194,7 @@ ChannelLayout derive_channels(std::span<const std::string> names, std::span<cons
         channel_index.try_emplace(channel_name, static_cast<int>(layout.channels.size()));
     slot.channel = it->second;
     if (inserted) {
-      layout.channels.push_back({channel_name, width, default_linearisation(channel_name)});
+      layout.channels.push_back(default_channel(channel_name, width));
       sources.push_back(source);
     } else {
       if (sources[static_cast<std::size_t>(slot.channel)] != source) {

@@ -619,6 +619,9 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
     auto t0 = Clock::now();
     const std::uint32_t epoch = ws.next_epoch();
     const TranslationBlend blend = t.blend;
+    // Channels count intents like positions do (a disjoint paint stays exact); where two
+    // different colours overlap the result is clamped to the channel's range.
+    const NodeBlend channel_blend = t.node_blend;
     with_translation_ops(blend, [&](auto ops) {
       using Ops = decltype(ops);
       using Value = typename Ops::Value;
@@ -649,7 +652,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
         decompose<Ops>(links, level_count, pyramid(ws.vec_users[u]), epoch);
       blend_and_reconstruct<Ops>(
           links, level_count,
-          std::span(ws.vec_users.data(), users), out, epoch, NodeBlend::magnitude);
+          std::span(ws.vec_users.data(), users), out, epoch, channel_blend);
       auto& list = out.levels[0].list;
       std::sort(list.begin(), list.end());
       for (std::uint32_t v : list) {
@@ -658,8 +661,9 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
         float result[4];
         for (std::uint32_t k = 0; k < width; ++k) {
           const float b = channel.values[std::size_t{v} * width + k];
-          result[k] = from_linear(channel.desc.linearisation,
-                                  to_linear(channel.desc.linearisation, b) + d.v[k]);
+          result[k] = std::clamp(from_linear(channel.desc.linearisation,
+                                             to_linear(channel.desc.linearisation, b) + d.v[k]),
+                                 channel.desc.min_value, channel.desc.max_value);
           changed |= std::memcmp(&result[k], &b, sizeof(float)) != 0;
         }
         if (changed) {

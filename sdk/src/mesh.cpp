@@ -102,12 +102,18 @@ float from_linear(Linearisation lin, float linear) {
   return linear;
 }
 
+ChannelDesc default_channel(std::string_view name, std::uint32_t width) {
+  ChannelDesc d{std::string(name), width, default_linearisation(name)};
+  if (name == "albedo" || name == "metallic" || name == "roughness") {
+    d.min_value = 0.f;
+    d.max_value = 1.f;
+  }
+  return d;
+}
+
 std::vector<ChannelDesc> material_channels() {
-  return {
-      {"albedo", 3, Linearisation::srgb},
-      {"metallic", 1, Linearisation::identity},
-      {"roughness", 1, Linearisation::square},
-  };
+  return {default_channel("albedo", 3), default_channel("metallic", 1),
+          default_channel("roughness", 1)};
 }
 
 int Mesh::find_channel(std::string_view name) const {

@@ -208,7 +208,7 @@ Mesh from_openmesh(const OpenMeshTriMesh& om) {
     if (holds<3>(*p)) width = 3;
     if (holds<4>(*p)) width = 4;
     if (width == 0) continue;
-    channels.push_back({p->name(), width, default_linearisation(p->name())});
+    channels.push_back(default_channel(p->name(), width));
   }
   return from_openmesh(om, channels);
 }

@@ -162,13 +162,13 @@ std::vector<Scenario> make_scenarios(std::uint32_t faces) {
     out.push_back(std::move(s));
   }
   {
-    Scenario s{"four-users", "grab, twist, detail and paint by four artists at once", sphere, {}, true, {}, {}};
-    const Stroke g = grab(pz, 1.4f, px, 0.2f), t = twist(pz, 0.9f, pz, 0.6f),
-                 d = detail({0.5f, 0, 0.86f}, 0.3f, 0.07f), p = paint(nx, 0.6f, {0.2f, 0.8f, 0.2f}, 0.5f, 0.f);
-    s.edits = {with(sphere, {g}), with(sphere, {t}), with(sphere, {d}), with(sphere, {p})};
+    Scenario s{"four-users", "a coarse twist with a detail on it, a grab elsewhere, and paint", sphere, {}, true, {}, {}};
+    const Stroke t = twist(pz, 1.0f, pz, 0.9f), d = detail({0.5f, 0, 0.86f}, 0.3f, 0.07f),
+                 g = grab(nx, 0.8f, py, 0.25f), p = paint(py, 0.6f, {0.2f, 0.8f, 0.2f}, 0.5f, 0.f);
+    s.edits = {with(sphere, {t}), with(sphere, {d}), with(sphere, {g}), with(sphere, {p})};
     s.expected = with(sphere, {p, d, t, g});
     s.full_beats = {MergeMethod::sum, MergeMethod::average, MergeMethod::weighted_translation,
-                    MergeMethod::multiscale_translation};
+                    MergeMethod::paper_blend};
     out.push_back(std::move(s));
   }
   return out;

@@ -182,7 +182,7 @@ TEST(IoModels, EveryTestModelLoadsOrIsRejectedWithItsName) {
   // float-color.ply: float red/green/blue become albedo (alpha dropped).
   const Mesh& coloured = all["PLY/float-color.ply"];
   ASSERT_EQ(coloured.channels.size(), 1u);
-  EXPECT_EQ(coloured.channels[0].desc, (ChannelDesc{"albedo", 3, Linearisation::srgb}));
+  EXPECT_EQ(coloured.channels[0].desc, (ChannelDesc{"albedo", 3, Linearisation::srgb, 0.f, 1.f}));
 
   // Files that must be rejected, for the stated reason.
   auto expect_rejected = [&](const std::string& name, const std::string& reason) {
@@ -386,7 +386,7 @@ TEST(IoPly, AllEncodingsAndScalarTypesGiveTheSameMesh) {
   EXPECT_EQ(names, (std::vector<std::string>{"albedo", "c8", "i8", "s16", "i16", "u16", "uu16",
                                              "i32", "ii32", "u32", "uu32", "rough", "roughness"}));
   const Channel& albedo = big.channels[0];
-  EXPECT_EQ(albedo.desc, (ChannelDesc{"albedo", 3, Linearisation::srgb}));
+  EXPECT_EQ(albedo.desc, (ChannelDesc{"albedo", 3, Linearisation::srgb, 0.f, 1.f}));
   EXPECT_EQ(albedo.values[0], 1.f);
   EXPECT_EQ(albedo.values[4 * 3 + 1], static_cast<float>(102.0 / 255.0));
   EXPECT_EQ(big.channels[1].values[0], -128.f);
@@ -396,7 +396,7 @@ TEST(IoPly, AllEncodingsAndScalarTypesGiveTheSameMesh) {
   EXPECT_EQ(rough.desc, (ChannelDesc{"rough", 2, Linearisation::identity}));
   EXPECT_EQ(rough.values[0], 0.6f);  // rough_r is component 0 although it comes later
   EXPECT_EQ(rough.values[1], 0.1f);
-  EXPECT_EQ(big.channels[12].desc, (ChannelDesc{"roughness", 1, Linearisation::square}));
+  EXPECT_EQ(big.channels[12].desc, (ChannelDesc{"roughness", 1, Linearisation::square, 0.f, 1.f}));
 }
 
 TEST(IoPly, ColourBecomesAlbedoOnlyWhenNoAlbedoChannelExists) {

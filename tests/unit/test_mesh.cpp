@@ -244,9 +244,10 @@ TEST(MeshLinearisation, Names) {
 // Channels
 
 TEST(MeshChannels, MaterialChannels) {
-  const std::vector<ChannelDesc> expected = {{"albedo", 3, Linearisation::srgb},
-                                             {"metallic", 1, Linearisation::identity},
-                                             {"roughness", 1, Linearisation::square}};
+  // The material channels are stored in [0, 1]: merged values are clamped there.
+  const std::vector<ChannelDesc> expected = {{"albedo", 3, Linearisation::srgb, 0.f, 1.f},
+                                             {"metallic", 1, Linearisation::identity, 0.f, 1.f},
+                                             {"roughness", 1, Linearisation::square, 0.f, 1.f}};
   EXPECT_EQ(material_channels(), expected);
   for (const ChannelDesc& d : material_channels()) {
     EXPECT_EQ(default_linearisation(d.name), d.linearisation) << d.name;

@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <string>
 #include <string_view>
@@ -47,8 +48,16 @@ struct ChannelDesc {
   std::string name;
   std::uint32_t width = 1;
   Linearisation linearisation = Linearisation::identity;
+  /// Valid range of stored values; merged values are clamped into it (two independent
+  /// edits can add up beyond what either painted).
+  float min_value = -std::numeric_limits<float>::infinity();
+  float max_value = std::numeric_limits<float>::infinity();
   friend bool operator==(const ChannelDesc&, const ChannelDesc&) = default;
 };
+
+/// The description a channel called `name` gets when a file does not say more: the
+/// material channels' linearisation and [0, 1] range, identity and unbounded otherwise.
+ChannelDesc default_channel(std::string_view name, std::uint32_t width);
 
 struct Channel {
   ChannelDesc desc;
