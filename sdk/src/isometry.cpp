@@ -13,8 +13,10 @@ double det3(const double m[9]) {
          m[2] * (m[3] * m[7] - m[4] * m[6]);
 }
 
+}  // namespace
+
 /// Quaternion (w >= 0) of a rotation matrix, Shepperd's method (largest pivot first).
-Quat quat_from_rotation(const double m[9]) {
+Quat quat_from_rotation_matrix(const double m[9]) {
   const double tr = m[0] + m[4] + m[8];
   double w, x, y, z;
   if (tr > 0) {
@@ -49,6 +51,8 @@ Quat quat_from_rotation(const double m[9]) {
           static_cast<float>(z * k)};
 }
 
+namespace {
+Quat quat_from_rotation(const double m[9]) { return quat_from_rotation_matrix(m); }
 }  // namespace
 
 Quat quat_from_matrix(const float m[9]) {

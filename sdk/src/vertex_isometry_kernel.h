@@ -24,6 +24,12 @@ struct Frame {
   }
 };
 
+/// Closed form of the paper's per-face rotation: the SVD-closest rotation to
+/// A = (e0b, e1b, nb)(e0a, e1a, na)^-1. Both triangles have right-handed orthonormal frames
+/// F = (x, y, n) with x along e0, so A = Fb diag(M, 1) Fa^T with M the 2x2 map of the edges
+/// in those frames (det M > 0). The closest rotation is invariant under the orthogonal
+/// factors, and that of a 2x2 map [[a, b], [c, d]] is the plane rotation by
+/// atan2(c - b, a + d); hence R = Fb Rz(theta) Fa^T exactly, with no iteration.
 inline bool face_rotation_kernel(const Vec3f& a0, const Vec3f& a1, const Vec3f& a2,
                                  const Vec3f& b0, const Vec3f& b1, const Vec3f& b2, Quat& out) {
   struct D3 {
@@ -35,32 +41,43 @@ inline bool face_rotation_kernel(const Vec3f& a0, const Vec3f& a1, const Vec3f& 
   auto cross = [](const D3& u, const D3& v) -> D3 {
     return {u.y * v.z - u.z * v.y, u.z * v.x - u.x * v.z, u.x * v.y - u.y * v.x};
   };
-  auto norm2 = [](const D3& u) { return u.x * u.x + u.y * u.y + u.z * u.z; };
+  auto dot3 = [](const D3& u, const D3& v) { return u.x * v.x + u.y * v.y + u.z * v.z; };
+  auto scale = [](const D3& u, double s) -> D3 { return {u.x * s, u.y * s, u.z * s}; };
   const D3 e0a = sub(a1, a0), e1a = sub(a2, a0), e0b = sub(b1, b0), e1b = sub(b2, b0);
   const D3 ca = cross(e0a, e1a), cb = cross(e0b, e1b);
-  const double da2 = norm2(ca), db2 = norm2(cb);
+  const double la2 = dot3(e0a, e0a), lb2 = dot3(e0b, e0b);
+  const double da2 = dot3(ca, ca), db2 = dot3(cb, cb);
   // Degenerate before or after: no usable frame, no rotation from this face. A triangle
   // flattened in float arithmetic keeps a cross product of rounding noise (sin of its
   // angles ~1e-7), whose normal would be arbitrary, so the bound sits well above float
   // resolution: sin(angle between the edges) > 1e-5.
   const double tol = 1e-10;
-  if (!(da2 > tol * norm2(e0a) * norm2(e1a))) return false;
-  if (!(db2 > tol * norm2(e0b) * norm2(e1b))) return false;
-  const double da = std::sqrt(da2), db = std::sqrt(db2);
-  const D3 na{ca.x / da, ca.y / da, ca.z / da};
-  const D3 nb{cb.x / db, cb.y / db, cb.z / db};
-  // Rows of (e0a, e1a, na)^-1: (e1a x na)/|ca|, (na x e0a)/|ca|, na.
-  D3 r0 = cross(e1a, na), r1 = cross(na, e0a);
-  r0 = {r0.x / da, r0.y / da, r0.z / da};
-  r1 = {r1.x / da, r1.y / da, r1.z / da};
-  const double bx[3] = {e0b.x, e0b.y, e0b.z}, by[3] = {e1b.x, e1b.y, e1b.z},
-               bn[3] = {nb.x, nb.y, nb.z};
-  const double ar0[3] = {r0.x, r0.y, r0.z}, ar1[3] = {r1.x, r1.y, r1.z},
-               an[3] = {na.x, na.y, na.z};
-  double m[9];
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) m[3 * i + j] = bx[i] * ar0[j] + by[i] * ar1[j] + bn[i] * an[j];
-  return closest_rotation(m, out);
+  if (!(da2 > tol * la2 * dot3(e1a, e1a))) return false;
+  if (!(db2 > tol * lb2 * dot3(e1b, e1b))) return false;
+  // frames
+  const D3 na = scale(ca, 1.0 / std::sqrt(da2)), nb = scale(cb, 1.0 / std::sqrt(db2));
+  const D3 xa = scale(e0a, 1.0 / std::sqrt(la2)), xb = scale(e0b, 1.0 / std::sqrt(lb2));
+  const D3 ya = cross(na, xa), yb = cross(nb, xb);
+  // edges in their own frames: e0 = (|e0|, 0), e1 = (u, v) with v > 0
+  const double pa = std::sqrt(la2), ua = dot3(e1a, xa), va = dot3(e1a, ya);
+  const double pb = std::sqrt(lb2), ub = dot3(e1b, xb), vb = dot3(e1b, yb);
+  // M = [e0b' e1b'] [e0a' e1a']^-1, [e0a' e1a'] = [[pa, ua], [0, va]]
+  const double m00 = pb / pa, m01 = (ub - m00 * ua) / va;
+  const double m10 = 0.0, m11 = vb / va;
+  const double cs = m00 + m11, sn = m10 - m01;
+  const double h = std::sqrt(cs * cs + sn * sn);
+  if (!(h > 0)) return false;
+  const double c = cs / h, s = sn / h;
+  // x' = c xb + s yb, y' = -s xb + c yb; R = x' xa^T + y' ya^T + nb na^T
+  const D3 xr{c * xb.x + s * yb.x, c * xb.y + s * yb.y, c * xb.z + s * yb.z};
+  const D3 yr{c * yb.x - s * xb.x, c * yb.y - s * xb.y, c * yb.z - s * xb.z};
+  const double r[9] = {xr.x * xa.x + yr.x * ya.x + nb.x * na.x, xr.x * xa.y + yr.x * ya.y + nb.x * na.y,
+                       xr.x * xa.z + yr.x * ya.z + nb.x * na.z, xr.y * xa.x + yr.y * ya.x + nb.y * na.x,
+                       xr.y * xa.y + yr.y * ya.y + nb.y * na.y, xr.y * xa.z + yr.y * ya.z + nb.y * na.z,
+                       xr.z * xa.x + yr.z * ya.x + nb.z * na.x, xr.z * xa.y + yr.z * ya.y + nb.z * na.y,
+                       xr.z * xa.z + yr.z * ya.z + nb.z * na.z};
+  out = quat_from_rotation_matrix(r);
+  return true;
 }
 
 struct VertexIsometryScratch {

@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
@@ -566,3 +567,55 @@ TEST(IsometryVertex, FloatFlattenedFaceLeavesNeighboursUnrotated) {
 
 }  // namespace
 }  // namespace csculpt
+
+namespace {
+
+// The closed-form face rotation must equal the SVD-closest rotation of the paper's matrix
+// A = (e0b, e1b, nb)(e0a, e1a, na)^-1 for arbitrary (non-rigid) deformations of a triangle.
+TEST(IsometryFaceRotation, ClosedFormEqualsSvdOfPaperMatrix) {
+  std::uint64_t state = 12345;
+  auto next = [&] {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<float>((state >> 40) & 0xffffff) / static_cast<float>(0x1000000) * 2.f - 1.f;
+  };
+  int checked = 0;
+  for (int trial = 0; trial < 5000; ++trial) {
+    const csculpt::Vec3f a0{next(), next(), next()}, a1{next(), next(), next()}, a2{next(), next(), next()};
+    const float amount = trial % 2 ? 0.05f : 0.6f;
+    const csculpt::Vec3f b0{a0.x + amount * next(), a0.y + amount * next(), a0.z + amount * next()};
+    const csculpt::Vec3f b1{a1.x + amount * next(), a1.y + amount * next(), a1.z + amount * next()};
+    const csculpt::Vec3f b2{a2.x + amount * next(), a2.y + amount * next(), a2.z + amount * next()};
+    csculpt::Quat fast;
+    if (!csculpt::face_rotation(a0, a1, a2, b0, b1, b2, fast)) continue;
+    // build A in double exactly as the paper writes it
+    auto d = [](const csculpt::Vec3f& p, const csculpt::Vec3f& q) {
+      return std::array<double, 3>{double(p.x) - q.x, double(p.y) - q.y, double(p.z) - q.z};
+    };
+    auto cross = [](const std::array<double, 3>& u, const std::array<double, 3>& v) {
+      return std::array<double, 3>{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
+                                   u[0] * v[1] - u[1] * v[0]};
+    };
+    auto unit = [](std::array<double, 3> u) {
+      const double n = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+      return std::array<double, 3>{u[0] / n, u[1] / n, u[2] / n};
+    };
+    const auto e0a = d(a1, a0), e1a = d(a2, a0), e0b = d(b1, b0), e1b = d(b2, b0);
+    const auto na = unit(cross(e0a, e1a)), nb = unit(cross(e0b, e1b));
+    Eigen::Matrix3d ma, mb;
+    ma << e0a[0], e1a[0], na[0], e0a[1], e1a[1], na[1], e0a[2], e1a[2], na[2];
+    mb << e0b[0], e1b[0], nb[0], e0b[1], e1b[1], nb[1], e0b[2], e1b[2], nb[2];
+    const Eigen::Matrix3d a = mb * ma.inverse();
+    double m[9];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) m[3 * i + j] = a(i, j);
+    csculpt::Quat reference;
+    ASSERT_TRUE(csculpt::closest_rotation_svd(m, reference));
+    const double dotq = std::abs(double(fast.w) * reference.w + double(fast.x) * reference.x +
+                                 double(fast.y) * reference.y + double(fast.z) * reference.z);
+    ASSERT_GT(dotq, 1.0 - 1e-5) << "trial " << trial;
+    ++checked;
+  }
+  EXPECT_GT(checked, 4900);
+}
+
+}  // namespace

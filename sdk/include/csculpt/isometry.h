@@ -18,7 +18,11 @@ bool closest_rotation(const double a[9], Quat& out);
 /// Reference: the same through Eigen's JacobiSVD, R = U diag(1, 1, det(U V^T)) V^T.
 bool closest_rotation_svd(const double a[9], Quat& out);
 
-/// The rotation of one triangle: SVD-closest rotation to A = (e0b, e1b, nb)(e0a, e1a, na)^-1.
+/// Quaternion (w >= 0) of a proper rotation matrix (row-major), Shepperd's method.
+Quat quat_from_rotation_matrix(const double m[9]);
+
+/// The rotation of one triangle: SVD-closest rotation to A = (e0b, e1b, nb)(e0a, e1a, na)^-1,
+/// computed in closed form (see the kernel): equal to closest_rotation_svd(A) to rounding.
 /// Returns false for a triangle degenerate before or after the edit (it then contributes
 /// nothing, so it cannot poison its vertices).
 bool face_rotation(const Vec3f& a0, const Vec3f& a1, const Vec3f& a2, const Vec3f& b0,
