@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "bench_merge.h"
+#include "demo.h"
 #include "csculpt/diff.h"
 #include "csculpt/error.h"
 #include "csculpt/hierarchy.h"
@@ -153,6 +154,17 @@ int main(int argc, char** argv) {
   diff->add_option("base", base, "base mesh")->required()->check(CLI::ExistingFile);
   diff->add_option("edited", edited, "edited mesh")->required()->check(CLI::ExistingFile);
 
+  auto* demo = app.add_subcommand(
+      "demo", "a collaborative session in this process: artists sculpt and paint, edits merge");
+  csculpt::cli::DemoOptions demo_options;
+  demo->add_option("--artists", demo_options.artists, "simulated artists")->capture_default_str()->check(CLI::Range(1u, 32u));
+  demo->add_option("--faces", demo_options.faces, "faces of the built-in sphere")->capture_default_str()->check(CLI::Range(20u, 20000000u));
+  demo->add_option("--rounds", demo_options.rounds, "sync rounds (one merge each)")->capture_default_str()->check(CLI::Range(1u, 100000u));
+  demo->add_option("--strokes", demo_options.strokes_per_round, "strokes per artist per round")->capture_default_str()->check(CLI::Range(1u, 1000u));
+  demo->add_option("--method", demo_options.method, "merge method")->capture_default_str();
+  demo->add_option("-o,--out", demo_options.out, "final mesh (PLY with materials and attribution colours)")->capture_default_str();
+  demo->add_option("--seed", demo_options.seed, "stroke seed")->capture_default_str();
+
   auto* scenarios = app.add_subcommand(
       "scenarios", "error of every merge method on the built-in scenarios (Markdown table or JSON)");
   std::uint32_t scenario_faces = 40000;
@@ -178,6 +190,7 @@ int main(int argc, char** argv) {
     if (*merge) return run_merge(base, edits, out, method, k);
     if (*hierarchy) return run_hierarchy(mesh_path, k);
     if (*diff) return run_diff(base, edited);
+    if (*demo) return csculpt::cli::run_demo(demo_options);
     if (*scenarios) return run_scenarios(scenario_faces, scenario_json);
     if (*bench_merge) return csculpt::cli::bench_merge(bo);
   } catch (const std::exception& e) {
