@@ -19,6 +19,7 @@
 #include "csculpt/dual_quat.h"
 #include "csculpt/error.h"
 #include "vertex_isometry_kernel.h"
+#include "worker_pool.h"
 
 namespace csculpt {
 namespace {
@@ -307,7 +308,7 @@ template <class Ops>
 void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
                            std::span<SparsePyramid<typename Ops::Value>> users,
                            SparsePyramid<typename Ops::Value>& merged, std::uint32_t epoch,
-                           NodeBlend rule) {
+                           NodeBlend rule, detail::WorkerPool& pool) {
   using Value = typename Ops::Value;
   // The nodes the result needs: ancestors of the vertices some diff changed.
   for (std::size_t i = 0; i + 1 < level_count; ++i) {
@@ -318,27 +319,34 @@ void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
     }
   }
   const auto user_count = static_cast<std::uint32_t>(users.size());
-  Value residuals[kMaxDiffs];
-  float magnitudes[kMaxDiffs];
   for (std::size_t level = level_count; level-- > 0;) {
     SparseLevel<Value>& out = merged.levels[level];
     const bool has_parents = level + 1 < level_count;
-    for (std::uint32_t c : out.list) {
-      for (std::size_t j = 0; j < users.size(); ++j) {
-        const SparseLevel<Value>& ul = users[j].levels[level];
-        const Value q = ul.has(c, epoch) ? ul.value[c] : Ops::identity();
+    // Each node reads only coarser, finished levels and writes only itself.
+    pool.for_chunks(out.list.size(), 2048, [&](std::size_t begin, std::size_t end) {
+      Value residuals[kMaxDiffs];
+      float magnitudes[kMaxDiffs];
+      for (std::size_t i = begin; i < end; ++i) {
+        const std::uint32_t c = out.list[i];
+        for (std::size_t j = 0; j < users.size(); ++j) {
+          const SparseLevel<Value>& ul = users[j].levels[level];
+          const Value q = ul.has(c, epoch) ? ul.value[c] : Ops::identity();
+          const Value parent =
+              has_parents
+                  ? parent_value<Ops>(links, level, level_count, c, users[j].levels[level + 1], epoch)
+                  : Ops::identity();
+          residuals[j] = Ops::residual(parent, q);
+          magnitudes[j] = Ops::magnitude(residuals[j]);
+        }
+        const Value residual =
+            blend_residuals<Ops>(rule, residuals, magnitudes, users.size(), user_count);
         const Value parent =
-            has_parents ? parent_value<Ops>(links, level, level_count, c, users[j].levels[level + 1], epoch)
-                        : Ops::identity();
-        residuals[j] = Ops::residual(parent, q);
-        magnitudes[j] = Ops::magnitude(residuals[j]);
+            has_parents
+                ? parent_value<Ops>(links, level, level_count, c, merged.levels[level + 1], epoch)
+                : Ops::identity();
+        out.value[c] = Ops::compose(parent, residual);
       }
-      const Value residual = blend_residuals<Ops>(rule, residuals, magnitudes, users.size(), user_count);
-      const Value parent =
-          has_parents ? parent_value<Ops>(links, level, level_count, c, merged.levels[level + 1], epoch)
-                      : Ops::identity();
-      out.value[c] = Ops::compose(parent, residual);
-    }
+    });
   }
 }
 
@@ -412,6 +420,7 @@ struct Merger::Workspace {
     std::vector<std::uint32_t> touched;
   };
   std::vector<Lookup> lookups;
+  detail::WorkerPool pool;
 
   std::uint32_t next_epoch() {
     if (++epoch == 0) {  // wrapped: every stamp must be forgotten
@@ -470,6 +479,9 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
     throw InvalidInput("merge: the mesh has " + std::to_string(base.vertex_count()) +
                        " vertices but the hierarchy was built for " +
                        std::to_string(hierarchy_.topology().vertex_count));
+  if (diffs.size() > kMaxDiffs)
+    throw InvalidInput("merge: " + std::to_string(diffs.size()) + " diffs given, at most " +
+                       std::to_string(kMaxDiffs) + " are merged at once");
   for (std::size_t i = 0; i < diffs.size(); ++i) validate(diffs[i], base, "diff " + std::to_string(i));
   if (!(frame.scale > 0) || !std::isfinite(frame.scale))
     throw InvalidInput("merge: the frame scale must be positive and finite");
@@ -525,28 +537,31 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
       if (ws.dq_users.size() < users) ws.dq_users.resize(users);
       for (std::uint32_t u = 0; u < users; ++u) ws.dq_users[u].reserve(hierarchy_, level_count);
       ws.dq_merged.reserve(hierarchy_, level_count);
-      for (std::uint32_t u = 0; u < users; ++u) {
+      // Each diff's isometries and averages are independent: one task per diff.
+      ws.pool.run(users, [&](std::size_t u) {
         auto& lk = ws.lookups[u];
         lk.isometry.resize(vertex_count, base.face_count());
         auto& level0 = ws.dq_users[u].levels[0];
         detail::compute_vertex_isometries(hierarchy_.topology(), base.positions,
-                                          diffs[order[u]].positions.indices, edited_of(u),
-                                          lk.isometry, level0.value, lk.touched, local);
+                                          diffs[order[u]].positions.indices,
+                                          edited_of(static_cast<std::uint32_t>(u)), lk.isometry,
+                                          level0.value, lk.touched, local);
         for (std::uint32_t v : lk.touched) {
           level0.stamp[v] = epoch;
           level0.list.push_back(v);
         }
-      }
+      });
       timings_.isometry_ms += ms_since(t0);
       t0 = Clock::now();
-      for (std::uint32_t u = 0; u < users; ++u)
+      ws.pool.run(users, [&](std::size_t u) {
         decompose<DqOps>(links, level_count, ws.dq_users[u], epoch);
+      });
       timings_.decompose_ms += ms_since(t0);
       t0 = Clock::now();
       for (std::uint32_t u = 0; u < users; ++u)
         for (std::uint32_t v : diffs[order[u]].positions.indices) ws.dq_merged.levels[0].mark(v, epoch);
       blend_and_reconstruct<DqOps>(links, level_count, std::span(ws.dq_users.data(), users),
-                                   ws.dq_merged, epoch, t.node_blend);
+                                   ws.dq_merged, epoch, t.node_blend, ws.pool);
       timings_.blend_ms += ms_since(t0);
       count_work(ws.dq_users, users, ws.dq_merged, level_count, sizeof(DualQuat));
       t0 = Clock::now();
@@ -582,8 +597,9 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
         }
         timings_.isometry_ms += ms_since(t0);
         t0 = Clock::now();
-        for (std::uint32_t u = 0; u < users; ++u)
+        ws.pool.run(users, [&](std::size_t u) {
           decompose<Ops>(links, level_count, pyramid(ws.vec_users[u]), epoch);
+        });
         timings_.decompose_ms += ms_since(t0);
         t0 = Clock::now();
         auto& out = pyramid(ws.vec_merged);
@@ -591,7 +607,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
           for (std::uint32_t v : diffs[order[u]].positions.indices) out.levels[0].mark(v, epoch);
         blend_and_reconstruct<Ops>(
             links, level_count,
-            std::span(ws.vec_users.data(), users), out, epoch, t.node_blend);
+            std::span(ws.vec_users.data(), users), out, epoch, t.node_blend, ws.pool);
         timings_.blend_ms += ms_since(t0);
         count_work(ws.vec_users, users, ws.vec_merged, level_count, sizeof(Vec4));
         t0 = Clock::now();
@@ -648,11 +664,12 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
           }
         }
       }
-      for (std::uint32_t u = 0; u < users; ++u)
+      ws.pool.run(users, [&](std::size_t u) {
         decompose<Ops>(links, level_count, pyramid(ws.vec_users[u]), epoch);
+      });
       blend_and_reconstruct<Ops>(
           links, level_count,
-          std::span(ws.vec_users.data(), users), out, epoch, channel_blend);
+          std::span(ws.vec_users.data(), users), out, epoch, channel_blend, ws.pool);
       auto& list = out.levels[0].list;
       std::sort(list.begin(), list.end());
       for (std::uint32_t v : list) {
