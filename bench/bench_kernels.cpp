@@ -44,6 +44,28 @@ void BM_ClosestRotationSvd(benchmark::State& state) {
 }
 BENCHMARK(BM_ClosestRotationSvd);
 
+void BM_FaceRotation(benchmark::State& state) {
+  // a sphere's triangles before and after a grab: the merge's per-face kernel
+  const Mesh base = make_sphere(20000);
+  Mesh edited = base;
+  Stroke s;
+  s.kind = Stroke::Kind::twist;
+  s.center = {0, 0, 1};
+  s.radius = 1.5f;
+  s.strength = 0.8f;
+  apply_stroke(edited, s);
+  std::size_t f = 0;
+  Quat q;
+  for (auto _ : state) {
+    const Triangle& t = base.triangles[f++ % base.triangles.size()];
+    benchmark::DoNotOptimize(face_rotation(base.positions[t[0]], base.positions[t[1]],
+                                           base.positions[t[2]], edited.positions[t[0]],
+                                           edited.positions[t[1]], edited.positions[t[2]], q));
+    benchmark::DoNotOptimize(q);
+  }
+}
+BENCHMARK(BM_FaceRotation);
+
 void BM_HierarchyBuild(benchmark::State& state) {
   const Mesh mesh = make_sphere(static_cast<std::uint32_t>(state.range(0)));
   for (auto _ : state) benchmark::DoNotOptimize(Hierarchy::build(mesh));

@@ -14,12 +14,24 @@ bool same_bits(const float* a, const float* b, std::uint32_t width) {
   return std::memcmp(a, b, sizeof(float) * width) == 0;
 }
 
+/// Word-at-a-time 64-bit hash (multiply-xorshift): the digest orders diffs canonically and
+/// runs over every changed value, so it must be cheap. Little-endian byte order.
 std::uint64_t mix(std::uint64_t h, const void* data, std::size_t bytes) {
   const auto* p = static_cast<const unsigned char*>(data);
-  for (std::size_t i = 0; i < bytes; ++i) {
-    h ^= p[i];
-    h *= 1099511628211ull;
+  auto step = [&h](std::uint64_t w) {
+    h ^= w + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
+    h *= 0xff51afd7ed558ccdull;
+    h ^= h >> 32;
+  };
+  std::size_t i = 0;
+  for (; i + 8 <= bytes; i += 8) {
+    std::uint64_t w;
+    std::memcpy(&w, p + i, 8);
+    step(w);
   }
+  std::uint64_t tail = bytes;
+  for (std::size_t k = 0; i < bytes; ++i, ++k) tail ^= std::uint64_t{p[i]} << (8 * (k + 1));
+  step(tail);
   return h;
 }
 

@@ -17,38 +17,38 @@ double det3(const double m[9]) {
 
 /// Quaternion (w >= 0) of a rotation matrix, Shepperd's method (largest pivot first).
 Quat quat_from_rotation_matrix(const double m[9]) {
+  // Shepperd: the largest of 4w^2, 4x^2, 4y^2, 4z^2 gives a well-conditioned pivot.
   const double tr = m[0] + m[4] + m[8];
   double w, x, y, z;
   if (tr > 0) {
-    const double s = std::sqrt(tr + 1.0) * 2;
+    const double s = std::sqrt(tr + 1.0) * 2, inv = 1.0 / s;
     w = 0.25 * s;
-    x = (m[7] - m[5]) / s;
-    y = (m[2] - m[6]) / s;
-    z = (m[3] - m[1]) / s;
+    x = (m[7] - m[5]) * inv;
+    y = (m[2] - m[6]) * inv;
+    z = (m[3] - m[1]) * inv;
   } else if (m[0] > m[4] && m[0] > m[8]) {
-    const double s = std::sqrt(1.0 + m[0] - m[4] - m[8]) * 2;
-    w = (m[7] - m[5]) / s;
+    const double s = std::sqrt(1.0 + m[0] - m[4] - m[8]) * 2, inv = 1.0 / s;
+    w = (m[7] - m[5]) * inv;
     x = 0.25 * s;
-    y = (m[1] + m[3]) / s;
-    z = (m[2] + m[6]) / s;
+    y = (m[1] + m[3]) * inv;
+    z = (m[2] + m[6]) * inv;
   } else if (m[4] > m[8]) {
-    const double s = std::sqrt(1.0 + m[4] - m[0] - m[8]) * 2;
-    w = (m[2] - m[6]) / s;
-    x = (m[1] + m[3]) / s;
+    const double s = std::sqrt(1.0 + m[4] - m[0] - m[8]) * 2, inv = 1.0 / s;
+    w = (m[2] - m[6]) * inv;
+    x = (m[1] + m[3]) * inv;
     y = 0.25 * s;
-    z = (m[5] + m[7]) / s;
+    z = (m[5] + m[7]) * inv;
   } else {
-    const double s = std::sqrt(1.0 + m[8] - m[0] - m[4]) * 2;
-    w = (m[3] - m[1]) / s;
-    x = (m[2] + m[6]) / s;
-    y = (m[5] + m[7]) / s;
+    const double s = std::sqrt(1.0 + m[8] - m[0] - m[4]) * 2, inv = 1.0 / s;
+    w = (m[3] - m[1]) * inv;
+    x = (m[2] + m[6]) * inv;
+    y = (m[5] + m[7]) * inv;
     z = 0.25 * s;
   }
-  const double n = std::sqrt(w * w + x * x + y * y + z * z);
+  // R is orthonormal to rounding, so (w, x, y, z) is unit to rounding: no renormalisation.
   const double sign = w < 0 ? -1.0 : 1.0;
-  const double k = sign / n;
-  return {static_cast<float>(w * k), static_cast<float>(x * k), static_cast<float>(y * k),
-          static_cast<float>(z * k)};
+  return {static_cast<float>(w * sign), static_cast<float>(x * sign),
+          static_cast<float>(y * sign), static_cast<float>(z * sign)};
 }
 
 namespace {

@@ -186,6 +186,45 @@ struct SparsePyramid {
   }
 };
 
+/// Where a vertex's merged value comes from when exactly one diff changed it: that diff
+/// (position in the canonical order) and the entry in its list; otherwise owner = kNoOwner.
+struct SoleChange {
+  std::uint32_t owner;
+  std::uint32_t entry;
+};
+constexpr std::uint32_t kNoOwner = 0xffffffffu;
+
+/// Marks the union of several increasing index lists on `level`, appending the nodes in
+/// increasing order (a k-way merge: no sort needed afterwards), and records for each
+/// appended node whether a single list holds it.
+template <class Value, class ListOf>
+void mark_sorted_union(SparseLevel<Value>& level, std::size_t lists, ListOf&& list_of,
+                       std::uint32_t epoch, std::vector<SoleChange>& sole) {
+  constexpr std::uint32_t kEnd = 0xffffffffu;
+  std::size_t cursor[64] = {};
+  sole.clear();
+  for (;;) {
+    std::uint32_t next = kEnd;
+    for (std::size_t j = 0; j < lists; ++j) {
+      const auto& l = list_of(j);
+      if (cursor[j] < l.size()) next = std::min(next, l[cursor[j]]);
+    }
+    if (next == kEnd) return;
+    level.mark(next, epoch);
+    SoleChange who{kNoOwner, 0};
+    std::uint32_t holders = 0;
+    for (std::size_t j = 0; j < lists; ++j) {
+      const auto& l = list_of(j);
+      if (cursor[j] < l.size() && l[cursor[j]] == next) {
+        who = {static_cast<std::uint32_t>(j), static_cast<std::uint32_t>(cursor[j])};
+        ++holders;
+        ++cursor[j];
+      }
+    }
+    sole.push_back(holders == 1 ? who : SoleChange{kNoOwner, 0});
+  }
+}
+
 /// Which parent links the pipeline follows: the K blended parents, or only the heaviest
 /// (the tree of the single-parent variant).
 struct ParentLinks {
@@ -355,19 +394,23 @@ struct MethodTraits {
   bool multiscale;      // use the hierarchy
   bool tree;            // K = 1
   TranslationBlend blend;
-  NodeBlend node_blend;  // for positions; channels always blend by magnitude
+  NodeBlend node_blend;  // for positions and channels
+  bool channels_per_vertex;  // channels blend per vertex (else over the hierarchy)
 };
 
 MethodTraits traits(MergeMethod m) {
   switch (m) {
-    case MergeMethod::full: return {true, true, false, TranslationBlend::magnitude, NodeBlend::intent};
-    case MergeMethod::single_parent: return {true, true, true, TranslationBlend::magnitude, NodeBlend::intent};
-    case MergeMethod::single_level_isometry: return {true, false, false, TranslationBlend::magnitude, NodeBlend::intent};
-    case MergeMethod::multiscale_translation: return {false, true, false, TranslationBlend::magnitude, NodeBlend::intent};
-    case MergeMethod::weighted_translation: return {false, false, false, TranslationBlend::magnitude, NodeBlend::magnitude};
-    case MergeMethod::average: return {false, false, false, TranslationBlend::average, NodeBlend::magnitude};
-    case MergeMethod::sum: return {false, false, false, TranslationBlend::sum, NodeBlend::magnitude};
-    case MergeMethod::paper_blend: return {true, true, false, TranslationBlend::magnitude, NodeBlend::magnitude};
+    // Channels need no rotation invariance, and counting intents already keeps a broad fill
+    // and a fine stroke inside it apart, so they merge per vertex (exact where one artist
+    // painted, no hierarchy leak); paper-blend keeps the paper's hierarchy for them.
+    case MergeMethod::full: return {true, true, false, TranslationBlend::magnitude, NodeBlend::intent, true};
+    case MergeMethod::single_parent: return {true, true, true, TranslationBlend::magnitude, NodeBlend::intent, true};
+    case MergeMethod::single_level_isometry: return {true, false, false, TranslationBlend::magnitude, NodeBlend::intent, true};
+    case MergeMethod::multiscale_translation: return {false, true, false, TranslationBlend::magnitude, NodeBlend::intent, true};
+    case MergeMethod::weighted_translation: return {false, false, false, TranslationBlend::magnitude, NodeBlend::magnitude, true};
+    case MergeMethod::average: return {false, false, false, TranslationBlend::average, NodeBlend::magnitude, true};
+    case MergeMethod::sum: return {false, false, false, TranslationBlend::sum, NodeBlend::magnitude, true};
+    case MergeMethod::paper_blend: return {true, true, false, TranslationBlend::magnitude, NodeBlend::magnitude, false};
   }
   throw InvalidInput("unknown merge method " + std::to_string(static_cast<std::uint32_t>(m)));
 }
@@ -420,6 +463,7 @@ struct Merger::Workspace {
     std::vector<std::uint32_t> touched;
   };
   std::vector<Lookup> lookups;
+  std::vector<SoleChange> sole;
   detail::WorkerPool pool;
 
   std::uint32_t next_epoch() {
@@ -479,6 +523,8 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
     throw InvalidInput("merge: the mesh has " + std::to_string(base.vertex_count()) +
                        " vertices but the hierarchy was built for " +
                        std::to_string(hierarchy_.topology().vertex_count));
+  if (base.triangles != hierarchy_.topology().triangles)
+    throw InvalidInput("merge: the mesh's triangles differ from those the hierarchy was built for");
   if (diffs.size() > kMaxDiffs)
     throw InvalidInput("merge: " + std::to_string(diffs.size()) + " diffs given, at most " +
                        std::to_string(kMaxDiffs) + " are merged at once");
@@ -558,17 +604,19 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
       });
       timings_.decompose_ms += ms_since(t0);
       t0 = Clock::now();
-      for (std::uint32_t u = 0; u < users; ++u)
-        for (std::uint32_t v : diffs[order[u]].positions.indices) ws.dq_merged.levels[0].mark(v, epoch);
+      mark_sorted_union(ws.dq_merged.levels[0], users,
+                        [&](std::size_t u) -> const auto& { return diffs[order[u]].positions.indices; },
+                        epoch, ws.sole);
       blend_and_reconstruct<DqOps>(links, level_count, std::span(ws.dq_users.data(), users),
                                    ws.dq_merged, epoch, t.node_blend, ws.pool);
       timings_.blend_ms += ms_since(t0);
       count_work(ws.dq_users, users, ws.dq_merged, level_count, sizeof(DualQuat));
       t0 = Clock::now();
-      auto& changed_union = ws.dq_merged.levels[0].list;
-      std::sort(changed_union.begin(), changed_union.end());
-      for (std::uint32_t v : changed_union) {
-        const Vec3f p = from_local(ws.dq_merged.levels[0].value[v].apply(local.to_local(base.positions[v])));
+      const auto& changed_union = ws.dq_merged.levels[0].list;  // increasing
+      for (std::size_t i = 0; i < changed_union.size(); ++i) {
+        const std::uint32_t v = changed_union[i];
+        const Vec3f p = from_local(ws.dq_merged.levels[0].value[v].apply(
+                                  local.to_local(base.positions[v])));
         if (!(p == base.positions[v])) {
           merged.positions.indices.push_back(v);
           merged.positions.values.insert(merged.positions.values.end(), {p.x, p.y, p.z});
@@ -603,17 +651,18 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
         timings_.decompose_ms += ms_since(t0);
         t0 = Clock::now();
         auto& out = pyramid(ws.vec_merged);
-        for (std::uint32_t u = 0; u < users; ++u)
-          for (std::uint32_t v : diffs[order[u]].positions.indices) out.levels[0].mark(v, epoch);
+        mark_sorted_union(out.levels[0], users,
+                          [&](std::size_t u) -> const auto& { return diffs[order[u]].positions.indices; },
+                          epoch, ws.sole);
         blend_and_reconstruct<Ops>(
             links, level_count,
             std::span(ws.vec_users.data(), users), out, epoch, t.node_blend, ws.pool);
         timings_.blend_ms += ms_since(t0);
         count_work(ws.vec_users, users, ws.vec_merged, level_count, sizeof(Vec4));
         t0 = Clock::now();
-        auto& list = out.levels[0].list;
-        std::sort(list.begin(), list.end());
-        for (std::uint32_t v : list) {
+        const auto& list = out.levels[0].list;  // increasing
+        for (std::size_t i = 0; i < list.size(); ++i) {
+          const std::uint32_t v = list[i];
           const Value& d = out.levels[0].value[v];
           const Vec3f a = local.to_local(base.positions[v]);
           const Vec3f p = from_local({a.x + d.v[0], a.y + d.v[1], a.z + d.v[2]});
@@ -635,21 +684,27 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
     auto t0 = Clock::now();
     const std::uint32_t epoch = ws.next_epoch();
     const TranslationBlend blend = t.blend;
-    // Channels count intents like positions do (a disjoint paint stays exact); where two
-    // different colours overlap the result is clamped to the channel's range.
+    // Where two different colours overlap the result is clamped to the channel's range.
     const NodeBlend channel_blend = t.node_blend;
+    const std::size_t channel_levels = t.channels_per_vertex ? 1 : level_count;
     with_translation_ops(blend, [&](auto ops) {
       using Ops = decltype(ops);
       using Value = typename Ops::Value;
       if (ws.vec_users.size() < users) ws.vec_users.resize(users);
       auto pyramid = [](SparsePyramid<Vec4>& p) -> SparsePyramid<Vec4>& { return p; };
-      for (std::uint32_t u = 0; u < users; ++u) ws.vec_users[u].reserve(hierarchy_, level_count);
-      ws.vec_merged.reserve(hierarchy_, level_count);
+      for (std::uint32_t u = 0; u < users; ++u) ws.vec_users[u].reserve(hierarchy_, channel_levels);
+      ws.vec_merged.reserve(hierarchy_, channel_levels);
       auto& out = pyramid(ws.vec_merged);
+      static const std::vector<std::uint32_t> kNone;
+      std::array<const std::vector<std::uint32_t>*, kMaxDiffs> changed_lists{};
+      std::array<const float*, kMaxDiffs> changed_values{};
       for (std::uint32_t u = 0; u < users; ++u) {
         auto& level0 = pyramid(ws.vec_users[u]).levels[0];
+        changed_lists[u] = &kNone;
         for (const ChannelDiff& cd : diffs[order[u]].channels) {
           if (cd.desc.name != channel.desc.name) continue;
+          changed_lists[u] = &cd.change.indices;
+          changed_values[u] = cd.change.values.data();
           for (std::uint32_t i = 0; i < cd.change.indices.size(); ++i) {
             const std::uint32_t v = cd.change.indices[i];
             Value d;
@@ -660,24 +715,33 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
             }
             level0.mark(v, epoch);
             level0.value[v] = d;
-            out.levels[0].mark(v, epoch);
           }
         }
       }
+      mark_sorted_union(out.levels[0], users,
+                        [&](std::size_t u) -> const auto& { return *changed_lists[u]; }, epoch,
+                        ws.sole);
       ws.pool.run(users, [&](std::size_t u) {
-        decompose<Ops>(links, level_count, pyramid(ws.vec_users[u]), epoch);
+        decompose<Ops>(links, channel_levels, pyramid(ws.vec_users[u]), epoch);
       });
       blend_and_reconstruct<Ops>(
-          links, level_count,
+          links, channel_levels,
           std::span(ws.vec_users.data(), users), out, epoch, channel_blend, ws.pool);
-      auto& list = out.levels[0].list;
-      std::sort(list.begin(), list.end());
-      for (std::uint32_t v : list) {
+      const auto& list = out.levels[0].list;  // increasing
+      for (std::size_t i = 0; i < list.size(); ++i) {
+        const std::uint32_t v = list[i];
         const Value& d = out.levels[0].value[v];
         bool changed = false;
         float result[4];
+        const SoleChange sc = ws.sole[i];
         for (std::uint32_t k = 0; k < width; ++k) {
           const float b = channel.values[std::size_t{v} * width + k];
+          // one painter: its value, exactly (average keeps its definition: half of it)
+          if (sc.owner != kNoOwner && channel_levels == 1 && blend != TranslationBlend::average) {
+            result[k] = changed_values[sc.owner][std::size_t{sc.entry} * width + k];
+            changed |= std::memcmp(&result[k], &b, sizeof(float)) != 0;
+            continue;
+          }
           result[k] = std::clamp(from_linear(channel.desc.linearisation,
                                              to_linear(channel.desc.linearisation, b) + d.v[k]),
                                  channel.desc.min_value, channel.desc.max_value);

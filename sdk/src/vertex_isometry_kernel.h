@@ -54,20 +54,20 @@ inline bool face_rotation_kernel(const Vec3f& a0, const Vec3f& a1, const Vec3f& 
   const double tol = 1e-10;
   if (!(da2 > tol * la2 * dot3(e1a, e1a))) return false;
   if (!(db2 > tol * lb2 * dot3(e1b, e1b))) return false;
-  // frames
-  const D3 na = scale(ca, 1.0 / std::sqrt(da2)), nb = scale(cb, 1.0 / std::sqrt(db2));
-  const D3 xa = scale(e0a, 1.0 / std::sqrt(la2)), xb = scale(e0b, 1.0 / std::sqrt(lb2));
+  // Frames: x along e0, n along e0 x e1, y = n x x (one reciprocal each).
+  const double inv_la = 1.0 / std::sqrt(la2), inv_lb = 1.0 / std::sqrt(lb2);
+  const double area_a = std::sqrt(da2), area_b = std::sqrt(db2);
+  const D3 na = scale(ca, 1.0 / area_a), nb = scale(cb, 1.0 / area_b);
+  const D3 xa = scale(e0a, inv_la), xb = scale(e0b, inv_lb);
   const D3 ya = cross(na, xa), yb = cross(nb, xb);
-  // edges in their own frames: e0 = (|e0|, 0), e1 = (u, v) with v > 0
-  const double pa = std::sqrt(la2), ua = dot3(e1a, xa), va = dot3(e1a, ya);
-  const double pb = std::sqrt(lb2), ub = dot3(e1b, xb), vb = dot3(e1b, yb);
-  // M = [e0b' e1b'] [e0a' e1a']^-1, [e0a' e1a'] = [[pa, ua], [0, va]]
-  const double m00 = pb / pa, m01 = (ub - m00 * ua) / va;
-  const double m10 = 0.0, m11 = vb / va;
-  const double cs = m00 + m11, sn = m10 - m01;
-  const double h = std::sqrt(cs * cs + sn * sn);
-  if (!(h > 0)) return false;
-  const double c = cs / h, s = sn / h;
+  // The 2x2 map of the edges in those frames is M = [[pb/pa, (ub - pb ua/pa)/va], [0, vb/va]]
+  // with p = |e0|, u = e1.x, v = e1.y = |e0 x e1| / p; its polar angle comes from
+  // (m00 + m11, m10 - m01), here multiplied by the positive pa^2 pb^2 va / (pa pb) to need
+  // no further division: (pb^2 |ca| + pa^2 |cb|, pb^2 (e0a.e1a) - pa^2 (e0b.e1b)).
+  const double cs = lb2 * area_a + la2 * area_b;
+  const double sn = lb2 * dot3(e0a, e1a) - la2 * dot3(e0b, e1b);
+  const double inv_h = 1.0 / std::sqrt(cs * cs + sn * sn);
+  const double c = cs * inv_h, s = sn * inv_h;
   // x' = c xb + s yb, y' = -s xb + c yb; R = x' xa^T + y' ya^T + nb na^T
   const D3 xr{c * xb.x + s * yb.x, c * xb.y + s * yb.y, c * xb.z + s * yb.z};
   const D3 yr{c * yb.x - s * xb.x, c * yb.y - s * xb.y, c * yb.z - s * xb.z};

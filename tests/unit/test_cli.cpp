@@ -1,0 +1,453 @@
+// The `csculpt` program run as a user runs it: merge output bit-identical to the SDK's
+// merge_meshes, --help of every subcommand, the error contract on bad input (exit code, one
+// `csculpt: error:` line naming the file and the problem, no output file left behind), the
+// JSON of `hierarchy`, `diff`, `scenarios --json` and `bench merge`.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "csculpt/diff.h"
+#include "csculpt/generate.h"
+#include "csculpt/hierarchy.h"
+#include "csculpt/io.h"
+#include "csculpt/merge.h"
+#include "csculpt/mesh.h"
+#include "csculpt/scenarios.h"
+#include "test_meshes.h"
+
+namespace csculpt {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+std::string read_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> out;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) out.push_back(line);
+  return out;
+}
+
+bool contains_ci(const std::string& haystack, const std::string& needle) {
+  auto lower = [](std::string s) {
+    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return s;
+  };
+  return lower(haystack).find(lower(needle)) != std::string::npos;
+}
+
+struct Result {
+  int code = -1;
+  std::string out, err;
+};
+
+/// A fresh directory under testing::TempDir() per test, removed afterwards.
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::path(::testing::TempDir()) / ("csculpt_cli_" + std::to_string(::getpid()) + "_" +
+                                             info->test_suite_name() + "_" + info->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_ / "out");
+    ASSERT_TRUE(fs::exists(CSCULPT_CLI)) << CSCULPT_CLI;
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+
+  /// Runs `csculpt ARGS` (ARGS already quoted where needed), stdin from /dev/null.
+  Result run(const std::string& args) {
+    const fs::path out = dir_ / ("stdout" + std::to_string(runs_));
+    const fs::path err = dir_ / ("stderr" + std::to_string(runs_));
+    ++runs_;
+    const std::string cmd = quote(CSCULPT_CLI) + " " + args + " <" + quote("/dev/null") + " >" +
+                            quote(out.string()) + " 2>" + quote(err.string());
+    const int status = std::system(cmd.c_str());
+    Result r;
+    r.code = status != -1 && WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = read_file(out);
+    r.err = read_file(err);
+    fs::remove(out);
+    fs::remove(err);
+    return r;
+  }
+
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  std::string write(const Mesh& m, const std::string& name) const {
+    const std::string p = path(name);
+    write_mesh(m, p);
+    return p;
+  }
+
+  fs::path dir_;
+  int runs_ = 0;
+};
+
+Mesh with_strokes(const Mesh& base, std::initializer_list<Stroke> strokes) {
+  Mesh m = base;
+  for (const Stroke& s : strokes) apply_stroke(m, s);
+  return m;
+}
+
+Stroke stroke(Stroke::Kind kind, Vec3f center, float radius, float strength) {
+  Stroke s;
+  s.kind = kind;
+  s.center = center;
+  s.radius = radius;
+  s.strength = strength;
+  return s;
+}
+
+/// The base sphere with material channels and three overlapping edits of it.
+struct Fixture {
+  Mesh base;
+  std::vector<Mesh> edits;
+};
+const Fixture& fixture() {
+  static const Fixture f = [] {
+    Fixture x;
+    x.base = make_sphere(20000);
+    test::add_material_channels(x.base);
+    Stroke twist = stroke(Stroke::Kind::twist, {0, 0, 1}, 1.2f, 0.8f);
+    twist.axis = {0, 0, 1};
+    Stroke grab = stroke(Stroke::Kind::grab, {0.6f, 0, 0.8f}, 0.5f, 0.2f);
+    grab.axis = {1, 0, 0};
+    x.edits = {with_strokes(x.base, {twist}),
+               with_strokes(x.base, {stroke(Stroke::Kind::detail, {0.6f, 0, 0.8f}, 0.35f, 0.08f),
+                                     stroke(Stroke::Kind::paint, {0.6f, 0, 0.8f}, 0.4f, 1.f)}),
+               with_strokes(x.base, {grab})};
+    return x;
+  }();
+  return f;
+}
+
+// ---- merge: the same bits as the SDK -----------------------------------------------------
+
+TEST_F(Cli, MergeWritesExactlyWhatMergeMeshesComputes) {
+  const Fixture& f = fixture();
+  const std::string base = write(f.base, "base.ply");
+  const std::string a = write(f.edits[0], "a.ply"), b = write(f.edits[1], "b.ply"),
+                    c = write(f.edits[2], "c.ply");
+  // PLY round trip is exact, so the program merges the very meshes merge_meshes gets
+  ASSERT_EQ(test::first_difference(read_mesh(base), f.base), "");
+  struct Case {
+    std::string args;
+    std::vector<Mesh> edits;
+    MergeMethod method;
+    std::uint32_t k;
+  };
+  const std::vector<Case> runs = {
+      {quote(a) + " " + quote(b), {f.edits[0], f.edits[1]}, MergeMethod::full, 7},
+      {quote(a) + " " + quote(b) + " " + quote(c),
+       {f.edits[0], f.edits[1], f.edits[2]},
+       MergeMethod::full,
+       7},
+      {quote(c) + " " + quote(a) + " " + quote(b) + " --k 3",
+       {f.edits[0], f.edits[1], f.edits[2]},
+       MergeMethod::full,
+       3},
+      {quote(a) + " " + quote(b) + " --method single-parent --k 1",
+       {f.edits[0], f.edits[1]},
+       MergeMethod::single_parent,
+       1},
+      {quote(a) + " " + quote(b) + " --method sum", {f.edits[0], f.edits[1]}, MergeMethod::sum, 7},
+      {quote(b) + " " + quote(a) + " --method paper-blend",
+       {f.edits[0], f.edits[1]},
+       MergeMethod::paper_blend,
+       7},
+  };
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    SCOPED_TRACE(runs[i].args);
+    const std::string out = (dir_ / "out" / ("merged" + std::to_string(i) + ".ply")).string();
+    const Result r = run("merge " + quote(base) + " " + runs[i].args + " -o " + quote(out));
+    ASSERT_EQ(r.code, 0) << r.err;
+    ASSERT_TRUE(fs::exists(out));
+    const Mesh expected = merge_meshes(f.base, runs[i].edits, runs[i].method, runs[i].k);
+    EXPECT_EQ(test::first_difference(read_mesh(out), expected), "");
+  }
+  // the merged file is all the output directory holds (no temporaries left)
+  std::size_t files = 0;
+  for (const auto& e : fs::directory_iterator(dir_ / "out")) files += e.is_regular_file() ? 1 : 0;
+  EXPECT_EQ(files, runs.size());
+}
+
+// ---- --help ------------------------------------------------------------------------------
+
+TEST_F(Cli, HelpWorksForEverySubcommand) {
+  const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
+      {"--help", {"merge", "hierarchy", "diff", "scenarios", "bench"}},
+      {"merge --help", {"--method", "--k", "-o", "--out", "base", "edits"}},
+      {"hierarchy --help", {"--k", "mesh"}},
+      {"diff --help", {"base", "edited"}},
+      {"scenarios --help", {"--faces", "--json"}},
+      {"bench --help", {"merge"}},
+      {"bench merge --help", {"--faces", "--users", "--repeat", "--method", "--k"}},
+  };
+  for (const auto& [args, mentions] : cases) {
+    const Result r = run(args);
+    EXPECT_EQ(r.code, 0) << args << ": " << r.err;
+    for (const std::string& m : mentions)
+      EXPECT_TRUE(contains_ci(r.out, m)) << args << " does not mention " << m << ":\n" << r.out;
+  }
+}
+
+// ---- bad input ---------------------------------------------------------------------------
+
+/// An ascii PLY of `m`'s positions and triangles (no channels), with `override_value` written
+/// instead of coordinate `coord` of vertex `vertex` when `vertex` is in range.
+void write_ascii_ply(const Mesh& m, const std::string& path, std::size_t vertex = SIZE_MAX,
+                     int coord = 0, const std::string& override_value = {}) {
+  std::ofstream o(path);
+  o << "ply\nformat ascii 1.0\nelement vertex " << m.vertex_count()
+    << "\nproperty float x\nproperty float y\nproperty float z\nelement face " << m.face_count()
+    << "\nproperty list uchar int vertex_indices\nend_header\n";
+  o.precision(9);
+  for (std::size_t v = 0; v < m.vertex_count(); ++v) {
+    const float xyz[3] = {m.positions[v].x, m.positions[v].y, m.positions[v].z};
+    for (int c = 0; c < 3; ++c) {
+      if (c) o << ' ';
+      if (v == vertex && c == coord)
+        o << override_value;
+      else
+        o << xyz[c];
+    }
+    o << '\n';
+  }
+  for (const Triangle& t : m.triangles) o << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
+}
+
+/// The error contract: non-zero exit, stderr exactly one `csculpt: error:` line naming the
+/// offending file and the problem, nothing written to the output directory.
+void expect_error(const Result& r, const std::string& out_dir, const std::string& names_file,
+                  const std::vector<std::string>& problem_any_of, const std::string& what) {
+  SCOPED_TRACE(what);
+  EXPECT_NE(r.code, 0);
+  EXPECT_EQ(r.code, 1) << "runtime errors exit 1";
+  const std::vector<std::string> lines = lines_of(r.err);
+  ASSERT_EQ(lines.size(), 1u) << "stderr:\n" << r.err;
+  EXPECT_EQ(r.err.back(), '\n');
+  ::testing::Test::RecordProperty(what, lines[0]);
+  EXPECT_EQ(lines[0].rfind("csculpt: error: ", 0), 0u) << lines[0];
+  EXPECT_TRUE(contains_ci(lines[0], names_file)) << lines[0] << "\ndoes not name " << names_file;
+  bool problem = false;
+  for (const std::string& p : problem_any_of) problem = problem || contains_ci(lines[0], p);
+  EXPECT_TRUE(problem) << lines[0] << "\ndoes not say what is wrong";
+  EXPECT_TRUE(fs::is_empty(out_dir)) << "output left behind in " << out_dir;
+}
+
+TEST_F(Cli, BadInputFailsWithOneErrorLineAndNoOutput) {
+  const Mesh base = make_sphere(2000);
+  const std::string base_path = write(base, "base.ply");
+  Stroke g = stroke(Stroke::Kind::grab, {0, 0, 1}, 0.6f, 0.2f);
+  const std::string edit = write(with_strokes(base, {g}), "edit.ply");
+  const std::string out_dir = (dir_ / "out").string();
+  const std::string out = (dir_ / "out" / "merged.ply").string();
+  auto merge = [&](const std::string& b, const std::string& e1, const std::string& e2) {
+    return run("merge " + quote(b) + " " + quote(e1) + " " + quote(e2) + " -o " + quote(out));
+  };
+
+  const std::string malformed = path("broken.obj");
+  fs::copy_file(std::string(CSCULPT_TEST_MODELS) + "/invalid/malformed.obj", malformed);
+  expect_error(merge(base_path, edit, malformed), out_dir, malformed, {"index", "range"},
+               "malformed edit");
+  expect_error(merge(malformed, edit, edit), out_dir, malformed, {"index", "range"},
+               "malformed base");
+
+  const std::string other = write(make_sphere(5000), "other.ply");
+  expect_error(merge(base_path, edit, other), out_dir, other, {"vertices", "vertex count"},
+               "edit with another vertex count");
+
+  const std::string nan_edit = path("bad_coordinate.ply");
+  write_ascii_ply(with_strokes(base, {g}), nan_edit, 17, 1, "nan");
+  expect_error(merge(base_path, nan_edit, edit), out_dir, nan_edit,
+               {"nan", "finite", "not a number"}, "edit with a NaN coordinate");
+  const std::string inf_base = path("bad_base.ply");
+  write_ascii_ply(base, inf_base, 3, 2, "inf");
+  expect_error(merge(inf_base, edit, edit), out_dir, inf_base, {"inf", "finite"},
+               "base with an infinite coordinate");
+
+  const std::string empty = path("zero_bytes.ply");
+  fs::copy_file(std::string(CSCULPT_TEST_MODELS) + "/invalid/empty.ply", empty);
+  expect_error(merge(base_path, edit, empty), out_dir, empty, {"empty", "no vertices"},
+               "empty edit");
+  expect_error(merge(empty, edit, edit), out_dir, empty, {"empty", "no vertices"}, "empty base");
+
+  // an output that cannot be written: names the output file
+  const std::string bad_out = (dir_ / "no_such_dir" / "merged.ply").string();
+  expect_error(run("merge " + quote(base_path) + " " + quote(edit) + " " + quote(edit) + " -o " +
+                   quote(bad_out)),
+               out_dir, bad_out, {"cannot", "could not", "no such", "failed", "open", "write"},
+               "unwritable output");
+  EXPECT_FALSE(fs::exists(bad_out));
+
+  // a file the process may not read (only meaningful when not running as root)
+  if (::geteuid() != 0) {
+    const std::string locked = write(with_strokes(base, {g}), "locked.ply");
+    fs::permissions(locked, fs::perms::none);
+    expect_error(merge(base_path, edit, locked), out_dir, locked,
+                 {"cannot", "permission", "open", "read"}, "unreadable edit");
+    fs::permissions(locked, fs::perms::owner_all);
+  }
+}
+
+TEST_F(Cli, MissingFilesAreArgumentErrors) {
+  const Mesh base = make_sphere(2000);
+  const std::string base_path = write(base, "base.ply");
+  const std::string out = (dir_ / "out" / "merged.ply").string();
+  const std::string missing = path("does_not_exist.ply");
+  for (const std::string& args :
+       {"merge " + quote(base_path) + " " + quote(missing) + " " + quote(base_path) + " -o " +
+            quote(out),
+        "merge " + quote(missing) + " " + quote(base_path) + " " + quote(base_path) + " -o " +
+            quote(out),
+        "merge " + quote(base_path) + " " + quote(dir_.string()) + " " + quote(base_path) + " -o " +
+            quote(out),
+        "hierarchy " + quote(missing), "diff " + quote(base_path) + " " + quote(missing)}) {
+    const Result r = run(args);
+    EXPECT_NE(r.code, 0) << args;
+    EXPECT_TRUE(r.out.empty()) << args << ": " << r.out;
+    EXPECT_TRUE(contains_ci(r.err, missing) || contains_ci(r.err, dir_.string()))
+        << args << ": " << r.err;
+    EXPECT_FALSE(fs::exists(out)) << args;
+  }
+  // one edit only, no -o: argument errors too
+  EXPECT_NE(run("merge " + quote(base_path) + " " + quote(base_path) + " -o " + quote(out)).code,
+            0);
+  EXPECT_NE(run("merge " + quote(base_path) + " " + quote(base_path) + " " + quote(base_path)).code,
+            0);
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST_F(Cli, UnknownMethodListsTheValidNames) {
+  const Mesh base = make_sphere(2000);
+  const std::string base_path = write(base, "base.ply");
+  const std::string out = (dir_ / "out" / "merged.ply").string();
+  const Result r = run("merge " + quote(base_path) + " " + quote(base_path) + " " +
+                       quote(base_path) + " -o " + quote(out) + " --method bogus-blend");
+  std::vector<std::string> names;
+  for (MergeMethod m : all_merge_methods()) names.emplace_back(to_string(m));
+  expect_error(r, (dir_ / "out").string(), "bogus-blend", {"method"}, "unknown method");
+  for (const std::string& n : names)
+    EXPECT_TRUE(contains_ci(r.err, n)) << r.err << "\ndoes not list " << n;
+}
+
+// ---- JSON subcommands --------------------------------------------------------------------
+
+/// The number after "key": in a one-line JSON object (NaN when absent).
+double json_number(const std::string& json, const std::string& key) {
+  const std::string k = "\"" + key + "\":";
+  const std::size_t at = json.find(k);
+  if (at == std::string::npos) return std::numeric_limits<double>::quiet_NaN();
+  const char* start = json.c_str() + at + k.size();
+  char* end = nullptr;
+  const double v = std::strtod(start, &end);
+  return end == start ? std::numeric_limits<double>::quiet_NaN() : v;
+}
+
+/// One line holding one JSON object.
+void expect_one_json_line(const Result& r, const std::string& what) {
+  EXPECT_EQ(r.code, 0) << what << ": " << r.err;
+  const std::vector<std::string> lines = lines_of(r.out);
+  ASSERT_EQ(lines.size(), 1u) << what << ":\n" << r.out;
+  ASSERT_FALSE(lines[0].empty());
+  EXPECT_EQ(lines[0].front(), '{') << lines[0];
+  EXPECT_EQ(lines[0].back(), '}') << lines[0];
+  EXPECT_EQ(std::count(lines[0].begin(), lines[0].end(), '{'),
+            std::count(lines[0].begin(), lines[0].end(), '}'))
+      << lines[0];
+}
+
+TEST_F(Cli, HierarchyAndDiffPrintOneJsonObject) {
+  const Fixture& f = fixture();
+  const std::string base = write(f.base, "base.ply");
+  const std::string a = write(f.edits[1], "a.ply");
+
+  const Result h = run("hierarchy " + quote(base));
+  expect_one_json_line(h, "hierarchy");
+  const HierarchyStats stats = Hierarchy::build(f.base).stats();
+  EXPECT_EQ(json_number(h.out, "vertices"), double(f.base.vertex_count())) << h.out;
+  EXPECT_EQ(json_number(h.out, "levels"), double(stats.levels)) << h.out;
+  EXPECT_EQ(json_number(h.out, "nodes"), double(stats.nodes)) << h.out;
+  char digest_hex[32];
+  std::snprintf(digest_hex, sizeof digest_hex, "%016llx",
+                static_cast<unsigned long long>(Hierarchy::build(f.base).digest()));
+  EXPECT_NE(h.out.find(digest_hex), std::string::npos)
+      << "digest " << digest_hex << " in " << h.out;
+  const Result h1 = run("hierarchy " + quote(base) + " --k 1");
+  expect_one_json_line(h1, "hierarchy --k 1");
+  EXPECT_EQ(json_number(h1.out, "k"), 1.0) << h1.out;
+
+  const Result d = run("diff " + quote(base) + " " + quote(a));
+  expect_one_json_line(d, "diff");
+  const Diff diff = capture_diff(f.base, f.edits[1]);
+  EXPECT_EQ(json_number(d.out, "position_changes"), double(diff.positions.size())) << d.out;
+  EXPECT_EQ(json_number(d.out, "vertices"), double(f.base.vertex_count())) << d.out;
+  EXPECT_NE(d.out.find("\"albedo\""), std::string::npos) << d.out;
+
+  // diff of meshes that do not match: the error contract, naming the edited file
+  const std::string other = write(make_sphere(2000), "other.ply");
+  expect_error(run("diff " + quote(base) + " " + quote(other)), (dir_ / "out").string(), other,
+               {"vertices", "vertex count"}, "diff of another mesh");
+}
+
+TEST_F(Cli, ScenariosJsonHasOneObjectPerScenarioAndMethod) {
+  const Result r = run("scenarios --faces 2000 --json");
+  EXPECT_EQ(r.code, 0) << r.err;
+  const std::vector<std::string> lines = lines_of(r.out);
+  EXPECT_EQ(lines.size(), make_scenarios(2000).size() * all_merge_methods().size());
+  for (const std::string& l : lines) {
+    ASSERT_FALSE(l.empty());
+    EXPECT_EQ(l.front(), '{') << l;
+    EXPECT_EQ(l.back(), '}') << l;
+    EXPECT_NE(l.find("\"scenario\""), std::string::npos) << l;
+    EXPECT_TRUE(std::isfinite(json_number(l, "rel_err"))) << l;
+  }
+}
+
+TEST_F(Cli, BenchMergePrintsOneJsonLine) {
+  const Result r = run("bench merge --faces 2000 --users 2 --repeat 3");
+  expect_one_json_line(r, "bench merge");
+  for (const char* key : {"faces", "vertices", "users", "levels", "nodes", "hierarchy_ms",
+                          "capture_ms", "merge_ms", "stream_ms", "edited_fraction"}) {
+    const double v = json_number(r.out, key);
+    EXPECT_TRUE(std::isfinite(v) && v >= 0) << key << " in " << r.out;
+  }
+  const Mesh sphere = make_sphere(2000);
+  EXPECT_EQ(json_number(r.out, "faces"), double(sphere.face_count())) << r.out;
+  EXPECT_EQ(json_number(r.out, "vertices"), double(sphere.vertex_count())) << r.out;
+  EXPECT_EQ(json_number(r.out, "users"), 2.0) << r.out;
+  EXPECT_GT(json_number(r.out, "levels"), 1.0) << r.out;
+  EXPECT_GT(json_number(r.out, "edited_fraction"), 0.0) << r.out;
+  EXPECT_LE(json_number(r.out, "edited_fraction"), 1.0) << r.out;
+}
+
+}  // namespace
+}  // namespace csculpt
