@@ -73,7 +73,8 @@ class Merger {
 
   /// Merges `diffs` (each from `base`) into one diff from `base`. Vertices that no diff
   /// touches keep their exact base values; the merged diff lists only changed values.
-  /// Throws InvalidInput if a diff does not fit the base, or for more than 64 diffs.
+  /// Throws InvalidInput if a diff does not fit the base, for more than 64 diffs, or if the
+  /// base's triangles are not the hierarchy's (a sampled check: count, ends, 1024 samples).
   /// The work runs on a pool of the machine's hardware threads owned by this Merger.
   Diff merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod method,
              const MergeFrame& frame);
