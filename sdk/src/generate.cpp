@@ -5,6 +5,7 @@
 #include <map>
 
 #include "csculpt/dual_quat.h"
+#include "csculpt/random.h"
 
 namespace csculpt {
 namespace {
@@ -27,17 +28,10 @@ float falloff(float d, float r) {
   return t * t;
 }
 
-/// splitmix64: small, fast and identical everywhere
-struct Rng {
-  std::uint64_t s;
-  std::uint64_t next() {
-    std::uint64_t z = (s += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
-  }
-  float uniform() { return static_cast<float>(next() >> 40) / static_cast<float>(1ull << 24); }
-  float range(float a, float b) { return a + (b - a) * uniform(); }
+/// Deterministic artist randomness: the same strokes on every platform.
+struct Rng : SplitMix64 {
+  float uniform() { return uniform_float(); }
+  float range(float a, float b) { return range_float(a, b); }
   Vec3f direction() {
     for (;;) {
       const Vec3f v{range(-1, 1), range(-1, 1), range(-1, 1)};
@@ -221,7 +215,8 @@ void apply_stroke(Mesh& mesh, const Stroke& s, const Topology* topology) {
 
 std::vector<Stroke> scripted_strokes(const Mesh& mesh, std::uint64_t seed, std::uint32_t count,
                                      bool paint) {
-  Rng rng{seed * 0x2545F4914F6CDD1Dull + 17};
+  Rng rng;
+  rng.state = seed * 0x2545F4914F6CDD1Dull + 17;
   const float diag = bbox_diagonal(mesh.positions);
   std::vector<Stroke> strokes;
   for (std::uint32_t i = 0; i < count; ++i) {

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "csculpt/dual_quat.h"
+#include "csculpt/random.h"
 
 namespace csculpt {
 namespace {
@@ -27,17 +28,8 @@ using GQuat = glm::qua<double, glm::defaultp>;
 using GDual = glm::tdualquat<double, glm::defaultp>;
 using GVec = glm::dvec3;
 
-/// splitmix64: deterministic on every platform (unlike std:: distributions).
-struct Rng {
-  std::uint64_t s;
-  std::uint64_t next() {
-    std::uint64_t z = (s += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
-  }
-  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
-  double range(double a, double b) { return a + (b - a) * uniform(); }
+struct Rng : csculpt::SplitMix64 {
+  explicit Rng(std::uint64_t seed) { state = seed; }
   /// Uniformly distributed unit quaternion (Shoemake), sign random.
   Quat rotation() {
     const double u1 = uniform(), u2 = range(0, 2 * std::numbers::pi),

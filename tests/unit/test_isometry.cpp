@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "csculpt/dual_quat.h"
+#include "csculpt/random.h"
 #include "csculpt/generate.h"
 #include "csculpt/hierarchy.h"
 #include "csculpt/isometry.h"
@@ -21,16 +22,8 @@ namespace {
 
 using Mat3 = Eigen::Matrix3d;
 
-struct Rng {
-  std::uint64_t s;
-  std::uint64_t next() {
-    std::uint64_t z = (s += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
-  }
-  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
-  double range(double a, double b) { return a + (b - a) * uniform(); }
+struct Rng : csculpt::SplitMix64 {
+  explicit Rng(std::uint64_t seed) { state = seed; }
   /// log-uniform in [a, b]
   double log_range(double a, double b) { return std::exp(range(std::log(a), std::log(b))); }
   Eigen::Vector3d direction() {
