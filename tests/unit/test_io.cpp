@@ -22,8 +22,11 @@
 #include "csculpt/io.h"
 #include "csculpt/mesh.h"
 #include "test_meshes.h"
+#include "test_support.h"
 
 namespace csculpt {
+using csculpt::test::invalid_input_message;
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -31,16 +34,6 @@ using test::first_difference;
 
 const fs::path kModels = CSCULPT_TEST_MODELS;
 
-template <class Fn>
-std::string invalid_input_message(Fn&& fn) {
-  try {
-    fn();
-  } catch (const InvalidInput& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "expected InvalidInput";
-  return {};
-}
 
 bool starts_with(const std::string& s, const std::string& prefix) {
   return s.rfind(prefix, 0) == 0;

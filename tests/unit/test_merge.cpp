@@ -26,8 +26,11 @@
 #include "csculpt/mesh.h"
 #include "csculpt/scenarios.h"
 #include "test_meshes.h"
+#include "test_support.h"
 
 namespace csculpt {
+using csculpt::test::invalid_input_message;
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -827,17 +830,6 @@ TEST(MergeMaterials, DisjointPaintsExactIdenticalIdempotentOverlapsInRange) {
 
 // ---- 10. bad input -----------------------------------------------------------------------
 
-template <class Fn>
-std::string invalid_input_message(Fn&& fn) {
-  try {
-    fn();
-  } catch (const InvalidInput& e) {
-    return e.what();
-  } catch (const std::exception& e) {
-    return std::string("wrong exception type: ") + e.what();
-  }
-  return "no exception";
-}
 
 bool contains(const std::string& haystack, const std::string& needle) {
   std::string h = haystack, n = needle;

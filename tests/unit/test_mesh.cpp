@@ -12,8 +12,11 @@
 #include "csculpt/mesh.h"
 #include "csculpt/openmesh_interop.h"
 #include "test_meshes.h"
+#include "test_support.h"
 
 namespace csculpt {
+using csculpt::test::invalid_input_message;
+
 namespace {
 
 using test::first_difference;
@@ -21,16 +24,6 @@ using test::make_grid;
 using test::make_icosphere;
 
 // The message of the InvalidInput `fn` throws ("" and a test failure if it throws nothing).
-template <class Fn>
-std::string invalid_input_message(Fn&& fn) {
-  try {
-    fn();
-  } catch (const InvalidInput& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "expected InvalidInput";
-  return {};
-}
 
 Mesh single_triangle() {
   Mesh m;
