@@ -133,7 +133,7 @@ std::vector<DualQuat> vertex_isometries(const Topology& topology, std::span<cons
   std::vector<std::uint32_t> touched;
   detail::compute_vertex_isometries(
       topology, base, changed, [&](std::uint32_t v) -> const Vec3f& { return edited[v]; },
-      scratch, result, touched);
+      scratch, [&](std::uint32_t v, const DualQuat& q) { result[v] = q; }, touched);
   return result;
 }
 

@@ -154,23 +154,29 @@ struct VecOps {
 
 template <class Value>
 struct SparseLevel {
-  std::vector<Value> value;
-  std::vector<std::uint32_t> stamp;
+  /// Value and stamp side by side: a lookup costs one cache line, not two.
+  struct Slot {
+    Value value;
+    std::uint32_t stamp = 0;
+  };
+  std::vector<Slot> slots;
   std::vector<std::uint32_t> list;  ///< nodes stamped this epoch, in first-touch order
 
   void reserve_nodes(std::size_t n) {
-    if (value.size() < n) {
-      value.resize(n);
-      stamp.resize(n, 0);
-    }
+    if (slots.size() < n) slots.resize(n);
   }
-  bool has(std::uint32_t node, std::uint32_t epoch) const { return stamp[node] == epoch; }
+  bool has(std::uint32_t node, std::uint32_t epoch) const { return slots[node].stamp == epoch; }
+  Value& val(std::uint32_t node) { return slots[node].value; }
+  const Value& val(std::uint32_t node) const { return slots[node].value; }
   /// Marks the node; returns true if it was new this epoch.
   bool mark(std::uint32_t node, std::uint32_t epoch) {
-    if (stamp[node] == epoch) return false;
-    stamp[node] = epoch;
+    if (slots[node].stamp == epoch) return false;
+    slots[node].stamp = epoch;
     list.push_back(node);
     return true;
+  }
+  void forget() {
+    for (Slot& s : slots) s.stamp = 0;
   }
 };
 
@@ -256,16 +262,16 @@ void decompose(const ParentLinks& links, std::size_t level_count,
     SparseLevel<typename Ops::Value>& fine = pyramid.levels[i];
     SparseLevel<typename Ops::Value>& coarse = pyramid.levels[i + 1];
     for (std::uint32_t c : fine.list) {
-      const auto& q = fine.value[c];
+      const auto& q = fine.val(c);
       const std::uint32_t n = links.count(i, c);
       for (std::uint32_t k = 0; k < n; ++k) {
         const std::uint32_t p = links.parent(i, c, k);
-        if (coarse.mark(p, epoch)) coarse.value[p] = Ops::zero();
-        Ops::add_offset(coarse.value[p], links.weight(i, c, k), q);
+        if (coarse.mark(p, epoch)) coarse.val(p) = Ops::zero();
+        Ops::add_offset(coarse.val(p), links.weight(i, c, k), q);
       }
     }
     for (std::uint32_t p : coarse.list)
-      coarse.value[p] = Ops::finish_average(coarse.value[p], links.child_weight_sum(i + 1, p));
+      coarse.val(p) = Ops::finish_average(coarse.val(p), links.child_weight_sum(i + 1, p));
   }
 }
 
@@ -284,7 +290,7 @@ typename Ops::Value parent_value(const ParentLinks& links, std::size_t level,
     const std::uint32_t p = links.parent(level, node, k);
     const float w = links.weight(level, node, k);
     if (coarse.has(p, epoch)) {
-      Ops::add(acc, w, coarse.value[p]);
+      Ops::add(acc, w, coarse.val(p));
       any = true;
     } else {
       Ops::add(acc, w, Ops::identity());
@@ -369,7 +375,7 @@ void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
         const std::uint32_t c = out.list[i];
         for (std::size_t j = 0; j < users.size(); ++j) {
           const SparseLevel<Value>& ul = users[j].levels[level];
-          const Value q = ul.has(c, epoch) ? ul.value[c] : Ops::identity();
+          const Value q = ul.has(c, epoch) ? ul.val(c) : Ops::identity();
           const Value parent =
               has_parents
                   ? parent_value<Ops>(links, level, level_count, c, users[j].levels[level + 1], epoch)
@@ -383,7 +389,7 @@ void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
             has_parents
                 ? parent_value<Ops>(links, level, level_count, c, merged.levels[level + 1], epoch)
                 : Ops::identity();
-        out.value[c] = Ops::compose(parent, residual);
+        out.val(c) = Ops::compose(parent, residual);
       }
     });
   }
@@ -469,7 +475,7 @@ struct Merger::Workspace {
   std::uint32_t next_epoch() {
     if (++epoch == 0) {  // wrapped: every stamp must be forgotten
       auto clear = [](auto& pyramid) {
-        for (auto& l : pyramid.levels) std::fill(l.stamp.begin(), l.stamp.end(), 0);
+        for (auto& l : pyramid.levels) l.forget();
       };
       for (auto& p : dq_users) clear(p);
       clear(dq_merged);
@@ -599,14 +605,14 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
         auto& lk = ws.lookups[u];
         lk.isometry.resize(vertex_count, base.face_count());
         auto& level0 = ws.dq_users[u].levels[0];
-        detail::compute_vertex_isometries(hierarchy_.topology(), base.positions,
-                                          diffs[order[u]].positions.indices,
-                                          edited_of(static_cast<std::uint32_t>(u)), lk.isometry,
-                                          level0.value, lk.touched, local);
-        for (std::uint32_t v : lk.touched) {
-          level0.stamp[v] = epoch;
-          level0.list.push_back(v);
-        }
+        detail::compute_vertex_isometries(
+            hierarchy_.topology(), base.positions, diffs[order[u]].positions.indices,
+            edited_of(static_cast<std::uint32_t>(u)), lk.isometry,
+            [&level0, epoch](std::uint32_t v, const DualQuat& q) {
+              level0.slots[v] = {q, epoch};
+            },
+            lk.touched, local);
+        level0.list.assign(lk.touched.begin(), lk.touched.end());
       });
       timings_.isometry_ms += ms_since(t0);
       t0 = Clock::now();
@@ -626,7 +632,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
       const auto& changed_union = ws.dq_merged.levels[0].list;  // increasing
       for (std::size_t i = 0; i < changed_union.size(); ++i) {
         const std::uint32_t v = changed_union[i];
-        const Vec3f p = from_local(ws.dq_merged.levels[0].value[v].apply(
+        const Vec3f p = from_local(ws.dq_merged.levels[0].val(v).apply(
                                   local.to_local(base.positions[v])));
         if (!(p == base.positions[v])) {
           merged.positions.indices.push_back(v);
@@ -651,7 +657,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
             const Vec3f a = local.to_local(base.positions[v]);
             const Vec3f b = local.to_local({e[0], e[1], e[2]});
             level0.mark(v, epoch);
-            level0.value[v] = Value{{b.x - a.x, b.y - a.y, b.z - a.z, 0}};
+            level0.val(v) = Value{{b.x - a.x, b.y - a.y, b.z - a.z, 0}};
           }
         }
         timings_.isometry_ms += ms_since(t0);
@@ -674,7 +680,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
         const auto& list = out.levels[0].list;  // increasing
         for (std::size_t i = 0; i < list.size(); ++i) {
           const std::uint32_t v = list[i];
-          const Value& d = out.levels[0].value[v];
+          const Value& d = out.levels[0].val(v);
           const Vec3f a = local.to_local(base.positions[v]);
           const Vec3f p = from_local({a.x + d.v[0], a.y + d.v[1], a.z + d.v[2]});
           if (!(p == base.positions[v])) {
@@ -725,7 +731,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
               d.v[k] = e - b;
             }
             level0.mark(v, epoch);
-            level0.value[v] = d;
+            level0.val(v) = d;
           }
         }
       }
@@ -741,7 +747,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
       const auto& list = out.levels[0].list;  // increasing
       for (std::size_t i = 0; i < list.size(); ++i) {
         const std::uint32_t v = list[i];
-        const Value& d = out.levels[0].value[v];
+        const Value& d = out.levels[0].val(v);
         bool changed = false;
         float result[4];
         const SoleChange sc = ws.sole[i];

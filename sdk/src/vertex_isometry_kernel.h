@@ -84,13 +84,15 @@ struct VertexIsometryScratch {
   std::vector<std::uint32_t> face_stamp;
   std::vector<std::uint32_t> vertex_stamp;
   std::vector<Quat> rotation_sum;  ///< sum of (q_face - 1) over changed faces
+  std::vector<std::uint32_t> faces;   ///< faces around changed vertices, first-touch order
+  std::vector<Quat> face_offset;      ///< per listed face: q_face - 1 (zero if degenerate)
   std::uint32_t epoch = 0;
 
-  void resize(std::size_t vertices, std::size_t faces) {
-    if (face_stamp.size() < faces) face_stamp.resize(faces, 0);
-    if (vertex_stamp.size() < vertices) {
-      vertex_stamp.resize(vertices, 0);
-      rotation_sum.resize(vertices);
+  void resize(std::size_t vertex_count, std::size_t face_count) {
+    if (face_stamp.size() < face_count) face_stamp.resize(face_count, 0);
+    if (vertex_stamp.size() < vertex_count) {
+      vertex_stamp.resize(vertex_count, 0);
+      rotation_sum.resize(vertex_count);
     }
   }
   std::uint32_t next_epoch() {
@@ -106,15 +108,18 @@ struct VertexIsometryScratch {
 /// For every vertex on a face that has a changed vertex: q = q_R + eps q_T with q_R the
 /// normalised sum of its incident face rotations (unchanged and degenerate faces count as
 /// the identity) and q_T such that the vertex lands exactly on its edited position.
-/// Writes out[v] for those vertices and lists them in `touched` (in a deterministic order).
-template <class EditedPosition>
+/// Lists those vertices in `touched` (in a deterministic order).
+/// `store(v, q)` receives each result.
+template <class EditedPosition, class Store>
 void compute_vertex_isometries(const Topology& topology, std::span<const Vec3f> base,
                                std::span<const std::uint32_t> changed, EditedPosition&& edited,
-                               VertexIsometryScratch& scratch, std::span<DualQuat> out,
+                               VertexIsometryScratch& scratch, Store&& store,
                                std::vector<std::uint32_t>& touched, const Frame& frame = {}) {
   const std::uint32_t epoch = scratch.next_epoch();
   touched.clear();
+  scratch.faces.clear();
   const auto& vf = topology.vertex_faces;
+  // 1. the faces around changed vertices and the vertices they touch
   for (std::uint32_t v : changed) {
     if (scratch.vertex_stamp[v] != epoch) {  // also a changed vertex on no face
       scratch.vertex_stamp[v] = epoch;
@@ -125,30 +130,39 @@ void compute_vertex_isometries(const Topology& topology, std::span<const Vec3f> 
       const std::uint32_t f = vf.items[i];
       if (scratch.face_stamp[f] == epoch) continue;
       scratch.face_stamp[f] = epoch;
-      const Triangle& t = topology.triangles[f];
-      for (std::uint32_t u : t) {
+      scratch.faces.push_back(f);
+      for (std::uint32_t u : topology.triangles[f]) {
         if (scratch.vertex_stamp[u] != epoch) {
           scratch.vertex_stamp[u] = epoch;
           scratch.rotation_sum[u] = {0, 0, 0, 0};
           touched.push_back(u);
         }
       }
-      Quat q;
-      if (!face_rotation_kernel(base[t[0]], base[t[1]], base[t[2]], edited(t[0]), edited(t[1]),
-                                edited(t[2]), q))
-        continue;
-      const Quat offset{q.w - 1.f, q.x, q.y, q.z};
-      for (std::uint32_t u : t) scratch.rotation_sum[u] = scratch.rotation_sum[u] + offset;
     }
   }
+  // 2. their rotations: independent, so the divisions and roots of successive faces overlap
+  scratch.face_offset.resize(scratch.faces.size());
+  for (std::size_t k = 0; k < scratch.faces.size(); ++k) {
+    const Triangle& t = topology.triangles[scratch.faces[k]];
+    Quat q;
+    scratch.face_offset[k] =
+        face_rotation_kernel(base[t[0]], base[t[1]], base[t[2]], edited(t[0]), edited(t[1]),
+                             edited(t[2]), q)
+            ? Quat{q.w - 1.f, q.x, q.y, q.z}
+            : Quat{0, 0, 0, 0};
+  }
+  // 3. summed at their vertices
+  for (std::size_t k = 0; k < scratch.faces.size(); ++k)
+    for (std::uint32_t u : topology.triangles[scratch.faces[k]])
+      scratch.rotation_sum[u] = scratch.rotation_sum[u] + scratch.face_offset[k];
   for (std::uint32_t u : touched) {
     const Quat& s = scratch.rotation_sum[u];
     const float degree = static_cast<float>(vf.offsets[u + 1] - vf.offsets[u]);
     Quat r{degree + s.w, s.x, s.y, s.z};
     const float n2 = dot(r, r);
     r = n2 > 1e-30f ? (1.f / std::sqrt(n2)) * r : Quat{};
-    out[u] = canonical(DualQuat::from_rotation_and_points(r, frame.to_local(base[u]),
-                                                          frame.to_local(edited(u))));
+    store(u, canonical(DualQuat::from_rotation_and_points(r, frame.to_local(base[u]),
+                                                          frame.to_local(edited(u)))));
   }
 }
 
