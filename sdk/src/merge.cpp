@@ -275,32 +275,6 @@ void decompose(const ParentLinks& links, std::size_t level_count,
   }
 }
 
-/// The blend of a node's parents' values at `level + 1` (identity for the coarsest level or
-/// when every parent is the identity, exactly, so untouched regions stay bit-exact).
-template <class Ops>
-typename Ops::Value parent_value(const ParentLinks& links, std::size_t level,
-                                 std::size_t level_count, std::uint32_t node,
-                                 const SparseLevel<typename Ops::Value>& coarse,
-                                 std::uint32_t epoch) {
-  if (level + 1 >= level_count) return Ops::identity();
-  const std::uint32_t n = links.count(level, node);
-  bool any = false;
-  typename Ops::Value acc = Ops::zero();
-  for (std::uint32_t k = 0; k < n; ++k) {
-    const std::uint32_t p = links.parent(level, node, k);
-    const float w = links.weight(level, node, k);
-    if (coarse.has(p, epoch)) {
-      Ops::add(acc, w, coarse.val(p));
-      any = true;
-    } else {
-      Ops::add(acc, w, Ops::identity());
-    }
-  }
-  return any ? Ops::finish_parent_blend(acc) : Ops::identity();
-}
-
-/// Residuals of every diff at each needed node, blended by magnitude, recomposed from the
-/// coarsest level down. Fills merged.levels[0] for the nodes in merged.levels[0].list.
 /// How the residuals of several diffs at one node combine.
 ///  - magnitude: the paper's operator, normalize(sum_j m_j q_j) with m = |q - 1|. It
 ///    treats every residual at a node as one shared intent, so two edits of different scale
@@ -371,25 +345,51 @@ void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
     pool.for_chunks(out.list.size(), 2048, [&](std::size_t begin, std::size_t end) {
       Value residuals[kMaxDiffs];
       float magnitudes[kMaxDiffs];
+      Value parent_acc[kMaxDiffs + 1];  // the diffs' parent blends, then the merged one
+      bool parent_any[kMaxDiffs + 1];
+      const std::size_t n_users = users.size();
       for (std::size_t i = begin; i < end; ++i) {
         const std::uint32_t c = out.list[i];
-        for (std::size_t j = 0; j < users.size(); ++j) {
+        // One pass over the node's parent links serves every diff and the merged result.
+        for (std::size_t j = 0; j <= n_users; ++j) {
+          parent_acc[j] = Ops::zero();
+          parent_any[j] = false;
+        }
+        if (has_parents) {
+          const SparseLevel<Value>& merged_coarse = merged.levels[level + 1];
+          const std::uint32_t n = links.count(level, c);
+          for (std::uint32_t k = 0; k < n; ++k) {
+            const std::uint32_t p = links.parent(level, c, k);
+            const float w = links.weight(level, c, k);
+            for (std::size_t j = 0; j < n_users; ++j) {
+              const SparseLevel<Value>& coarse = users[j].levels[level + 1];
+              if (coarse.has(p, epoch)) {
+                Ops::add(parent_acc[j], w, coarse.val(p));
+                parent_any[j] = true;
+              } else {
+                Ops::add(parent_acc[j], w, Ops::identity());
+              }
+            }
+            if (merged_coarse.has(p, epoch)) {
+              Ops::add(parent_acc[n_users], w, merged_coarse.val(p));
+              parent_any[n_users] = true;
+            } else {
+              Ops::add(parent_acc[n_users], w, Ops::identity());
+            }
+          }
+        }
+        // identity exactly when no parent differs from it, so untouched regions stay exact
+        auto parent_of = [&](std::size_t j) {
+          return parent_any[j] ? Ops::finish_parent_blend(parent_acc[j]) : Ops::identity();
+        };
+        for (std::size_t j = 0; j < n_users; ++j) {
           const SparseLevel<Value>& ul = users[j].levels[level];
           const Value q = ul.has(c, epoch) ? ul.val(c) : Ops::identity();
-          const Value parent =
-              has_parents
-                  ? parent_value<Ops>(links, level, level_count, c, users[j].levels[level + 1], epoch)
-                  : Ops::identity();
-          residuals[j] = Ops::residual(parent, q);
+          residuals[j] = parent_any[j] ? Ops::residual(parent_of(j), q) : q;
           magnitudes[j] = Ops::magnitude(residuals[j]);
         }
-        const Value residual =
-            blend_residuals<Ops>(rule, residuals, magnitudes, users.size(), user_count);
-        const Value parent =
-            has_parents
-                ? parent_value<Ops>(links, level, level_count, c, merged.levels[level + 1], epoch)
-                : Ops::identity();
-        out.val(c) = Ops::compose(parent, residual);
+        const Value residual = blend_residuals<Ops>(rule, residuals, magnitudes, n_users, user_count);
+        out.val(c) = parent_any[n_users] ? Ops::compose(parent_of(n_users), residual) : residual;
       }
     });
   }
