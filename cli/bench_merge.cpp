@@ -51,12 +51,18 @@ int bench_merge(const BenchMergeOptions& o) {
   for (std::uint32_t u = 0; u < o.users; ++u) {
     Mesh edit = base;
     const auto strokes = scripted_strokes(base, o.seed * 1000 + u, 64, o.paint);
+    const double target = o.edited_fraction * static_cast<double>(base.vertex_count());
     std::size_t touched = 0;
     for (const Stroke& s : strokes) {
-      if (static_cast<double>(touched) >= o.edited_fraction * static_cast<double>(base.vertex_count())) break;
-      apply_stroke(edit, s, &hierarchy.topology());
+      if (static_cast<double>(touched) >= target) break;
+      Mesh next = edit;
+      apply_stroke(next, s, &hierarchy.topology());
+      const std::size_t next_touched = capture_diff(base, next).touched_vertices();
+      // a stroke that would overshoot the target by more than 10% is skipped, not kept
+      if (static_cast<double>(next_touched) > 1.1 * target && touched > 0) continue;
+      edit = std::move(next);
+      touched = next_touched;
       ++strokes_total;
-      touched = capture_diff(base, edit).touched_vertices();
     }
     fraction_sum += static_cast<double>(touched) / static_cast<double>(base.vertex_count());
     edits.push_back(std::move(edit));

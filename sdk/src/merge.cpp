@@ -61,7 +61,6 @@ struct DqOps {
     acc.real.w += total_weight;
     return canonical(normalized(acc));
   }
-  static Value finish_parent_blend(const Value& acc) { return canonical(normalized(acc)); }
   static Value residual(const Value& parent, const Value& node) {
     return canonical(inverse(parent) * node);
   }
@@ -109,7 +108,6 @@ struct VecOps {
     for (float& x : acc.v) x *= inv;
     return acc;
   }
-  static Value finish_parent_blend(const Value& acc) { return acc; }
   static Value residual(const Value& parent, const Value& node) {
     Value r;
     for (int i = 0; i < 4; ++i) r.v[i] = node.v[i] - parent.v[i];
@@ -351,36 +349,36 @@ void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
       for (std::size_t i = begin; i < end; ++i) {
         const std::uint32_t c = out.list[i];
         // One pass over the node's parent links serves every diff and the merged result.
+        // Sum of w (q - 1) over parents that differ from the identity; the identity's share
+        // (the weights' total) is added once at the end.
         for (std::size_t j = 0; j <= n_users; ++j) {
           parent_acc[j] = Ops::zero();
           parent_any[j] = false;
         }
+        float weight_total = 0;
         if (has_parents) {
           const SparseLevel<Value>& merged_coarse = merged.levels[level + 1];
           const std::uint32_t n = links.count(level, c);
           for (std::uint32_t k = 0; k < n; ++k) {
             const std::uint32_t p = links.parent(level, c, k);
             const float w = links.weight(level, c, k);
+            weight_total += w;
             for (std::size_t j = 0; j < n_users; ++j) {
               const SparseLevel<Value>& coarse = users[j].levels[level + 1];
               if (coarse.has(p, epoch)) {
-                Ops::add(parent_acc[j], w, coarse.val(p));
+                Ops::add_offset(parent_acc[j], w, coarse.val(p));
                 parent_any[j] = true;
-              } else {
-                Ops::add(parent_acc[j], w, Ops::identity());
               }
             }
             if (merged_coarse.has(p, epoch)) {
-              Ops::add(parent_acc[n_users], w, merged_coarse.val(p));
+              Ops::add_offset(parent_acc[n_users], w, merged_coarse.val(p));
               parent_any[n_users] = true;
-            } else {
-              Ops::add(parent_acc[n_users], w, Ops::identity());
             }
           }
         }
         // identity exactly when no parent differs from it, so untouched regions stay exact
         auto parent_of = [&](std::size_t j) {
-          return parent_any[j] ? Ops::finish_parent_blend(parent_acc[j]) : Ops::identity();
+          return parent_any[j] ? Ops::finish_average(parent_acc[j], weight_total) : Ops::identity();
         };
         for (std::size_t j = 0; j < n_users; ++j) {
           const SparseLevel<Value>& ul = users[j].levels[level];
