@@ -163,4 +163,26 @@ inline std::string first_difference(const Mesh& a, const Mesh& b) {
   return {};
 }
 
+/// An icosphere with the material channels plus a 2-wide and a 4-wide channel whose values
+/// exercise float round trips (not simple fractions).
+inline Mesh make_icosphere_with_channels() {
+  Mesh m = make_icosphere(2);
+  add_material_channels(m);
+  const int uv = m.add_channel({"uv", 2});
+  const int tint = m.add_channel({"tint", 4});
+  for (std::size_t v = 0; v < m.vertex_count(); ++v) {
+    for (std::size_t k = 0; k < 2; ++k) {
+      m.channels[static_cast<std::size_t>(uv)].values[2 * v + k] = static_cast<float>(v + k) / 7.f;
+    }
+    for (std::size_t k = 0; k < 4; ++k) {
+      m.channels[static_cast<std::size_t>(tint)].values[4 * v + k] =
+          std::nextafter(static_cast<float>(v * k) / 3.f, 2.f);
+    }
+  }
+  // Values that text formats get wrong unless they print enough digits.
+  m.positions[0] = {0.1f, -0.f, 1.f / 3.f};
+  m.positions[1] = {std::numeric_limits<float>::denorm_min(), 16777217.f, -1e-30f};
+  return m;
+}
+
 }  // namespace csculpt::test

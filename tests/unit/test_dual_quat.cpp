@@ -20,9 +20,12 @@
 
 #include "csculpt/dual_quat.h"
 #include "csculpt/random.h"
+#include "test_support.h"
 
 namespace csculpt {
 namespace {
+
+using csculpt::test::max_diff;
 
 using GQuat = glm::qua<double, glm::defaultp>;
 using GDual = glm::tdualquat<double, glm::defaultp>;
@@ -64,16 +67,6 @@ double dist(const Vec3f& a, const Vec3f& b) {
   return dist(a, GVec(b.x, b.y, b.z));
 }
 
-/// Largest absolute component difference of two dual quaternions (no sign handling).
-double max_diff(const DualQuat& a, const DualQuat& b) {
-  const float av[8] = {a.real.w, a.real.x, a.real.y, a.real.z,
-                       a.dual.w, a.dual.x, a.dual.y, a.dual.z};
-  const float bv[8] = {b.real.w, b.real.x, b.real.y, b.real.z,
-                       b.dual.w, b.dual.x, b.dual.y, b.dual.z};
-  double m = 0;
-  for (int i = 0; i < 8; ++i) m = std::max(m, std::abs(double(av[i]) - double(bv[i])));
-  return m;
-}
 double max_diff(const DualQuat& a, const GDual& b) {
   const double av[8] = {a.real.w, a.real.x, a.real.y, a.real.z,
                         a.dual.w, a.dual.x, a.dual.y, a.dual.z};

@@ -76,25 +76,6 @@ class IoFiles : public ::testing::Test {
   fs::path dir_;
 };
 
-Mesh sphere_with_channels() {
-  Mesh m = test::make_icosphere(2);
-  test::add_material_channels(m);
-  const int uv = m.add_channel({"uv", 2});
-  const int tint = m.add_channel({"tint", 4});
-  for (std::size_t v = 0; v < m.vertex_count(); ++v) {
-    for (std::size_t k = 0; k < 2; ++k) {
-      m.channels[static_cast<std::size_t>(uv)].values[2 * v + k] = static_cast<float>(v + k) / 7.f;
-    }
-    for (std::size_t k = 0; k < 4; ++k) {
-      m.channels[static_cast<std::size_t>(tint)].values[4 * v + k] =
-          std::nextafter(static_cast<float>(v * k) / 3.f, 2.f);
-    }
-  }
-  // Values that text formats get wrong unless they print enough digits.
-  m.positions[0] = {0.1f, -0.f, 1.f / 3.f};
-  m.positions[1] = {std::numeric_limits<float>::denorm_min(), 16777217.f, -1e-30f};
-  return m;
-}
 
 // ------------------------------------------------------------------------------------------
 // assimp-testmodels
@@ -739,7 +720,7 @@ TEST(IoStl, Errors) {
 // Files: round trips, atomic writes, dispatch
 
 TEST_F(IoFiles, PlyRoundTripIsBitExact) {
-  Mesh m = sphere_with_channels();
+  Mesh m = test::make_icosphere_with_channels();
   m.channels[0].desc.linearisation = Linearisation::identity;  // kept through a header comment
   write_mesh(m, path("s.ply"));
   EXPECT_EQ(first_difference(read_mesh(path("s.ply")), m), "");
@@ -790,7 +771,7 @@ TEST_F(IoFiles, TruncatedBinaryPly) {
 }
 
 TEST_F(IoFiles, ObjRoundTripIsBitExactForPositions) {
-  const Mesh m = sphere_with_channels();
+  const Mesh m = test::make_icosphere_with_channels();
   write_mesh(m, path("s.OBJ"));
   const Mesh back = read_mesh(path("s.OBJ"));
   EXPECT_EQ(first_difference(back, Mesh{m.positions, m.triangles, {}}), "");

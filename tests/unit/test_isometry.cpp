@@ -16,9 +16,12 @@
 #include "csculpt/hierarchy.h"
 #include "csculpt/isometry.h"
 #include "csculpt/mesh.h"
+#include "test_support.h"
 
 namespace csculpt {
 namespace {
+
+using csculpt::test::max_diff;
 
 using Mat3 = Eigen::Matrix3d;
 
@@ -328,15 +331,6 @@ double dist(const Vec3f& a, const Vec3f& b) {
   return std::sqrt(dx * dx + dy * dy + dz * dz);
 }
 
-double max_diff(const DualQuat& a, const DualQuat& b) {
-  const float av[8] = {a.real.w, a.real.x, a.real.y, a.real.z,
-                       a.dual.w, a.dual.x, a.dual.y, a.dual.z};
-  const float bv[8] = {b.real.w, b.real.x, b.real.y, b.real.z,
-                       b.dual.w, b.dual.x, b.dual.y, b.dual.z};
-  double m = 0;
-  for (int i = 0; i < 8; ++i) m = std::max(m, std::abs(double(av[i]) - double(bv[i])));
-  return m;
-}
 double motion_diff(const DualQuat& a, const DualQuat& b) {
   return std::min(max_diff(a, b), max_diff(a, {-1.f * b.real, -1.f * b.dual}));
 }

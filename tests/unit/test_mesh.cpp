@@ -288,25 +288,9 @@ TEST(MeshBbox, Diagonal) {
 // ------------------------------------------------------------------------------------------
 // OpenMesh interop
 
-Mesh sphere_with_channels() {
-  Mesh m = make_icosphere(2);
-  test::add_material_channels(m);
-  const int uv = m.add_channel({"uv", 2});
-  const int tint = m.add_channel({"tint", 4});
-  for (std::size_t v = 0; v < m.vertex_count(); ++v) {
-    for (std::size_t k = 0; k < 2; ++k) {
-      m.channels[static_cast<std::size_t>(uv)].values[2 * v + k] = static_cast<float>(v + k) / 7.f;
-    }
-    for (std::size_t k = 0; k < 4; ++k) {
-      m.channels[static_cast<std::size_t>(tint)].values[4 * v + k] =
-          static_cast<float>(v * k) / 3.f;
-    }
-  }
-  return m;
-}
 
 TEST(OpenMeshInterop, RoundTripKeepsEverything) {
-  const Mesh m = sphere_with_channels();
+  const Mesh m = test::make_icosphere_with_channels();
   const OpenMeshTriMesh om = to_openmesh(m);
   EXPECT_EQ(om.n_vertices(), m.vertex_count());
   EXPECT_EQ(om.n_faces(), m.face_count());
