@@ -16,8 +16,10 @@ using namespace csculpt;
 std::vector<std::array<double, 9>> near_rotations(std::size_t n) {
   std::vector<std::array<double, 9>> out(n);
   for (std::size_t i = 0; i < n; ++i) {
-    const double a = 0.001 * static_cast<double>(i % 997), s = 1.0 + 0.0001 * static_cast<double>(i % 101);
-    out[i] = {s * std::cos(a), -std::sin(a), 0.01, std::sin(a), std::cos(a), 0.0, 0.0, 0.02, 1.0 / s};
+    const double a = 0.001 * static_cast<double>(i % 997),
+                 s = 1.0 + 0.0001 * static_cast<double>(i % 101);
+    out[i] = {s * std::cos(a), -std::sin(a), 0.01, std::sin(a), std::cos(a), 0.0, 0.0, 0.02,
+              1.0 / s};
   }
   return out;
 }

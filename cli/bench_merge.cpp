@@ -86,7 +86,8 @@ int bench_merge(const BenchMergeOptions& o) {
     bytes = t.bytes_touched;
     nodes = t.nodes_visited;
     merged_vertices = merged.positions.size();
-    if (stream_buffer.size() != bytes / sizeof(float)) stream_buffer.assign(bytes / sizeof(float), 1.f);
+    if (stream_buffer.size() != bytes / sizeof(float))
+      stream_buffer.assign(bytes / sizeof(float), 1.f);
     auto t3 = Clock::now();
     float acc = 0;
     for (float x : stream_buffer) acc += x;
@@ -109,13 +110,12 @@ int bench_merge(const BenchMergeOptions& o) {
       "\"stream_ms\":%.3f,\"merge_to_stream\":%.2f,\"isometry_ms\":%.3f,\"decompose_ms\":%.3f,"
       "\"blend_ms\":%.3f,\"apply_ms\":%.3f,\"nodes_visited\":%llu,\"bytes_touched\":%llu,"
       "\"merged_vertices\":%zu}\n",
-      std::string(to_string(method)).c_str(), base.face_count(), base.vertex_count(), o.users,
-      o.k, hs.levels, static_cast<unsigned long long>(hs.nodes), fraction_sum / o.users,
-      strokes_total, o.repeat, median(hierarchy_ms), median(capture_ms), median(merge_ms),
-      median(stream_ms), median(merge_ms) / std::max(1e-9, median(stream_ms)), median(iso_ms),
-      median(dec_ms), median(blend_ms), median(apply_ms),
-      static_cast<unsigned long long>(nodes), static_cast<unsigned long long>(bytes),
-      merged_vertices);
+      std::string(to_string(method)).c_str(), base.face_count(), base.vertex_count(), o.users, o.k,
+      hs.levels, static_cast<unsigned long long>(hs.nodes), fraction_sum / o.users, strokes_total,
+      o.repeat, median(hierarchy_ms), median(capture_ms), median(merge_ms), median(stream_ms),
+      median(merge_ms) / std::max(1e-9, median(stream_ms)), median(iso_ms), median(dec_ms),
+      median(blend_ms), median(apply_ms), static_cast<unsigned long long>(nodes),
+      static_cast<unsigned long long>(bytes), merged_vertices);
   return 0;
 }
 

@@ -26,8 +26,10 @@ int run_demo(const DemoOptions& o) {
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   const MergeFrame frame = MergeFrame::fit(version.positions);  // once per session
   Merger merger(hierarchy);
-  std::fprintf(stderr, "session: %u artists on a %zu-face sphere (%zu vertices), hierarchy %u levels in %.1f ms\n",
-               o.artists, version.face_count(), n, hierarchy.stats().levels, hierarchy_ms);
+  std::fprintf(
+      stderr,
+      "session: %u artists on a %zu-face sphere (%zu vertices), hierarchy %u levels in %.1f ms\n",
+      o.artists, version.face_count(), n, hierarchy.stats().levels, hierarchy_ms);
 
   // Per artist: its scripted strokes, and how much it moved each vertex (attribution).
   std::vector<std::vector<Stroke>> scripts;
@@ -93,13 +95,15 @@ int run_demo(const DemoOptions& o) {
     apply_diff(merged, version);
     merge_sum += ms;
     merge_max = std::max(merge_max, ms);
-    std::fprintf(stderr, "merge %2u: %u diffs, %zu vertices changed, %.2f ms, %u edits would conflict\n",
+    std::fprintf(stderr,
+                 "merge %2u: %u diffs, %zu vertices changed, %.2f ms, %u edits would conflict\n",
                  round + 1, o.artists, merged.touched_vertices(), ms, round_conflicts);
   }
 
   // Attribution colours (paper Fig. 1): green for artist A, blue for B, cyan for both,
   // further artists red/yellow/magenta; brightness by share of the total change.
-  static const float palette[6][3] = {{0, 1, 0}, {0, 0, 1}, {1, 0, 0}, {1, 1, 0}, {1, 0, 1}, {1, 0.5f, 0}};
+  static const float palette[6][3] = {{0, 1, 0}, {0, 0, 1}, {1, 0, 0},
+                                      {1, 1, 0}, {1, 0, 1}, {1, 0.5f, 0}};
   std::vector<float> colour(3 * n, 0.f);
   for (std::size_t v = 0; v < n; ++v) {
     float total = 0;
@@ -107,9 +111,9 @@ int run_demo(const DemoOptions& o) {
     if (!(total > 0)) continue;
     for (std::uint32_t a = 0; a < o.artists; ++a)
       for (int c = 0; c < 3; ++c)
-        colour[3 * v + static_cast<std::size_t>(c)] = std::min(
-            1.f, colour[3 * v + static_cast<std::size_t>(c)] +
-                     palette[a % 6][c] * std::min(1.f, 2.f * contribution[a][v] / total));
+        colour[3 * v + static_cast<std::size_t>(c)] =
+            std::min(1.f, colour[3 * v + static_cast<std::size_t>(c)] +
+                              palette[a % 6][c] * std::min(1.f, 2.f * contribution[a][v] / total));
   }
   ChannelDesc attribution{"attribution", 3, Linearisation::identity, 0.f, 1.f};
   const int index = version.add_channel(attribution);
@@ -117,7 +121,8 @@ int run_demo(const DemoOptions& o) {
   write_mesh(version, o.out);
 
   std::printf(
-      "{\"artists\":%u,\"faces\":%zu,\"vertices\":%zu,\"method\":\"%s\",\"rounds\":%u,\"strokes\":%u,"
+      "{\"artists\":%u,\"faces\":%zu,\"vertices\":%zu,\"method\":\"%s\",\"rounds\":%u,\"strokes\":%"
+      "u,"
       "\"merges\":%u,\"merge_ms_mean\":%.3f,\"merge_ms_max\":%.3f,\"vertices_per_diff\":%.0f,"
       "\"conflicting_edits\":%u,\"conflicting_fraction\":%.3f,\"out\":\"%s\"}\n",
       o.artists, version.face_count(), n, std::string(to_string(method)).c_str(), o.rounds, strokes,

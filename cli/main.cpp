@@ -7,13 +7,13 @@
 #include <vector>
 
 #include "bench_merge.h"
-#include "demo.h"
 #include "csculpt/diff.h"
 #include "csculpt/error.h"
 #include "csculpt/hierarchy.h"
 #include "csculpt/io.h"
 #include "csculpt/merge.h"
 #include "csculpt/scenarios.h"
+#include "demo.h"
 
 namespace {
 
@@ -43,9 +43,8 @@ int run_merge(const std::string& base_path, const std::vector<std::string>& edit
   Mesh result = base;
   apply_diff(merged, result);
   write_mesh(result, out);
-  std::fprintf(stderr, "merged %zu edits of %zu vertices with %s in %.2f ms -> %s\n",
-               diffs.size(), base.vertex_count(), std::string(to_string(method)).c_str(), ms,
-               out.c_str());
+  std::fprintf(stderr, "merged %zu edits of %zu vertices with %s in %.2f ms -> %s\n", diffs.size(),
+               base.vertex_count(), std::string(to_string(method)).c_str(), ms, out.c_str());
   return 0;
 }
 
@@ -81,7 +80,8 @@ int run_scenarios(std::uint32_t faces, bool json) {
   const std::vector<Scenario> scenarios = make_scenarios(faces);
   if (!json) {
     std::printf("| scenario |");
-    for (MergeMethod m : all_merge_methods()) std::printf(" %s |", std::string(to_string(m)).c_str());
+    for (MergeMethod m : all_merge_methods())
+      std::printf(" %s |", std::string(to_string(m)).c_str());
     std::printf("\n|---|");
     for (std::size_t i = 0; i < all_merge_methods().size(); ++i) std::printf("---|");
     std::printf("\n");
@@ -97,19 +97,23 @@ int run_scenarios(std::uint32_t faces, bool json) {
       apply_diff(merger.merge(sc.base, diffs, m), merged);
       const ScenarioScore s = score(sc, merged, hierarchy.topology());
       if (json) {
-        std::printf("{\"scenario\":\"%s\",\"method\":\"%s\",\"faces\":%zu,\"rel_err\":%.5f,"
-                    "\"roughness\":%.4f,\"channel_err\":%.5f}\n",
-                    sc.name.c_str(), std::string(to_string(m)).c_str(), sc.base.face_count(),
-                    s.rel_err, s.roughness, s.channel_err);
+        std::printf(
+            "{\"scenario\":\"%s\",\"method\":\"%s\",\"faces\":%zu,\"rel_err\":%.5f,"
+            "\"roughness\":%.4f,\"channel_err\":%.5f}\n",
+            sc.name.c_str(), std::string(to_string(m)).c_str(), sc.base.face_count(), s.rel_err,
+            s.roughness, s.channel_err);
       } else if (sc.has_expected) {
         bool has_channels = false;
         for (const Mesh& e : sc.edits)
           for (std::size_t c = 0; c < e.channels.size(); ++c)
             if (e.channels[c].values != sc.base.channels[c].values) has_channels = true;
         const bool has_positions = s.rel_err > 0 || !has_channels;
-        if (has_positions && has_channels) std::printf(" %.3f / %.3f |", s.rel_err, s.channel_err);
-        else if (has_channels) std::printf(" %.4f |", s.channel_err);
-        else std::printf(" %.3f |", s.rel_err);
+        if (has_positions && has_channels)
+          std::printf(" %.3f / %.3f |", s.rel_err, s.channel_err);
+        else if (has_channels)
+          std::printf(" %.4f |", s.channel_err);
+        else
+          std::printf(" %.3f |", s.rel_err);
       } else {
         std::printf(" r=%.2f |", s.roughness);
       }
@@ -137,9 +141,10 @@ int main(int argc, char** argv) {
       ->expected(2, -1)
       ->check(CLI::ExistingFile);
   merge->add_option("-o,--out", out, "merged mesh to write (.ply or .obj)")->required();
-  merge->add_option("--method", method,
-                    "full, single-parent, single-level-isometry, multiscale-translation, "
-                    "weighted-translation, average, sum")
+  merge
+      ->add_option("--method", method,
+                   "full, single-parent, single-level-isometry, multiscale-translation, "
+                   "weighted-translation, average, sum")
       ->capture_default_str();
   merge->add_option("--k", k, "blended parents per node (paper: 7)")
       ->capture_default_str()
@@ -148,7 +153,9 @@ int main(int argc, char** argv) {
   auto* hierarchy = app.add_subcommand("hierarchy", "hierarchy statistics of MESH (JSON)");
   std::string mesh_path;
   hierarchy->add_option("mesh", mesh_path, "mesh file")->required()->check(CLI::ExistingFile);
-  hierarchy->add_option("--k", k, "blended parents per node")->capture_default_str()->check(CLI::Range(1, 32));
+  hierarchy->add_option("--k", k, "blended parents per node")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 32));
 
   auto* diff = app.add_subcommand("diff", "statistics of the edit from BASE to EDITED (JSON)");
   diff->add_option("base", base, "base mesh")->required()->check(CLI::ExistingFile);
@@ -157,31 +164,54 @@ int main(int argc, char** argv) {
   auto* demo = app.add_subcommand(
       "demo", "a collaborative session in this process: artists sculpt and paint, edits merge");
   csculpt::cli::DemoOptions demo_options;
-  demo->add_option("--artists", demo_options.artists, "simulated artists")->capture_default_str()->check(CLI::Range(1u, 32u));
-  demo->add_option("--faces", demo_options.faces, "faces of the built-in sphere")->capture_default_str()->check(CLI::Range(20u, 20000000u));
-  demo->add_option("--rounds", demo_options.rounds, "sync rounds (one merge each)")->capture_default_str()->check(CLI::Range(1u, 100000u));
-  demo->add_option("--strokes", demo_options.strokes_per_round, "strokes per artist per round")->capture_default_str()->check(CLI::Range(1u, 1000u));
+  demo->add_option("--artists", demo_options.artists, "simulated artists")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 32u));
+  demo->add_option("--faces", demo_options.faces, "faces of the built-in sphere")
+      ->capture_default_str()
+      ->check(CLI::Range(20u, 20000000u));
+  demo->add_option("--rounds", demo_options.rounds, "sync rounds (one merge each)")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 100000u));
+  demo->add_option("--strokes", demo_options.strokes_per_round, "strokes per artist per round")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 1000u));
   demo->add_option("--method", demo_options.method, "merge method")->capture_default_str();
-  demo->add_option("-o,--out", demo_options.out, "final mesh (PLY with materials and attribution colours)")->capture_default_str();
+  demo->add_option("-o,--out", demo_options.out,
+                   "final mesh (PLY with materials and attribution colours)")
+      ->capture_default_str();
   demo->add_option("--seed", demo_options.seed, "stroke seed")->capture_default_str();
 
   auto* scenarios = app.add_subcommand(
-      "scenarios", "error of every merge method on the built-in scenarios (Markdown table or JSON)");
+      "scenarios",
+      "error of every merge method on the built-in scenarios (Markdown table or JSON)");
   std::uint32_t scenario_faces = 40000;
   bool scenario_json = false;
-  scenarios->add_option("--faces", scenario_faces, "sphere resolution")->capture_default_str()->check(CLI::Range(500u, 5000000u));
+  scenarios->add_option("--faces", scenario_faces, "sphere resolution")
+      ->capture_default_str()
+      ->check(CLI::Range(500u, 5000000u));
   scenarios->add_flag("--json", scenario_json, "one JSON object per scenario and method");
 
   auto* bench = app.add_subcommand("bench", "benchmarks (one JSON object per result)");
   bench->require_subcommand(1);
   csculpt::cli::BenchMergeOptions bo;
   auto* bench_merge = bench->add_subcommand("merge", "merge speed on a built-in sphere");
-  bench_merge->add_option("--faces", bo.faces, "approximate face count")->capture_default_str()->check(CLI::Range(20u, 50000000u));
-  bench_merge->add_option("--users", bo.users, "concurrent edits")->capture_default_str()->check(CLI::Range(1u, 64u));
+  bench_merge->add_option("--faces", bo.faces, "approximate face count")
+      ->capture_default_str()
+      ->check(CLI::Range(20u, 50000000u));
+  bench_merge->add_option("--users", bo.users, "concurrent edits")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 64u));
   bench_merge->add_option("--method", bo.method, "merge method")->capture_default_str();
-  bench_merge->add_option("--k", bo.k, "blended parents per node")->capture_default_str()->check(CLI::Range(1u, 32u));
-  bench_merge->add_option("--repeat", bo.repeat, "timed repetitions (median reported)")->capture_default_str()->check(CLI::Range(1u, 10000u));
-  bench_merge->add_option("--edited-fraction", bo.edited_fraction, "vertices each user touches")->capture_default_str()->check(CLI::Range(0.0, 1.0));
+  bench_merge->add_option("--k", bo.k, "blended parents per node")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 32u));
+  bench_merge->add_option("--repeat", bo.repeat, "timed repetitions (median reported)")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 10000u));
+  bench_merge->add_option("--edited-fraction", bo.edited_fraction, "vertices each user touches")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   bench_merge->add_flag("--paint", bo.paint, "add material channels and paint strokes");
   bench_merge->add_option("--seed", bo.seed, "stroke seed")->capture_default_str();
 

@@ -59,7 +59,8 @@ void validate_attribute(const AttributeDiff& a, std::uint32_t width, std::uint32
 
 std::size_t Diff::touched_vertices() const {
   std::vector<std::uint32_t> all(positions.indices);
-  for (const auto& c : channels) all.insert(all.end(), c.change.indices.begin(), c.change.indices.end());
+  for (const auto& c : channels)
+    all.insert(all.end(), c.change.indices.begin(), c.change.indices.end());
   std::sort(all.begin(), all.end());
   return static_cast<std::size_t>(std::unique(all.begin(), all.end()) - all.begin());
 }
@@ -132,9 +133,8 @@ DiffStats diff_stats(const Diff& diff, const Mesh& base) {
   DiffStats s;
   s.vertices = diff.vertex_count;
   s.position_changes = static_cast<std::uint32_t>(diff.positions.size());
-  s.edited_fraction = diff.vertex_count
-                          ? static_cast<double>(diff.touched_vertices()) / diff.vertex_count
-                          : 0.0;
+  s.edited_fraction =
+      diff.vertex_count ? static_cast<double>(diff.touched_vertices()) / diff.vertex_count : 0.0;
   s.bbox_diagonal = bbox_diagonal(base.positions);
   double sum2 = 0;
   for (std::size_t i = 0; i < diff.positions.size(); ++i) {
@@ -153,8 +153,8 @@ DiffStats diff_stats(const Diff& diff, const Mesh& base) {
       const auto& values = base.channels[static_cast<std::size_t>(index)].values;
       for (std::size_t i = 0; i < c.change.values.size(); ++i) {
         const std::size_t v = c.change.indices[i / c.desc.width];
-        const double d = std::abs(double(c.change.values[i]) -
-                                  values[v * c.desc.width + i % c.desc.width]);
+        const double d =
+            std::abs(double(c.change.values[i]) - values[v * c.desc.width + i % c.desc.width]);
         cs.max_change = std::max(cs.max_change, d);
       }
     }

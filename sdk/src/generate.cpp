@@ -10,10 +10,18 @@
 namespace csculpt {
 namespace {
 
-Vec3f add(Vec3f a, Vec3f b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-Vec3f sub(Vec3f a, Vec3f b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-Vec3f mul(Vec3f a, float s) { return {a.x * s, a.y * s, a.z * s}; }
-float dot3(Vec3f a, Vec3f b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+Vec3f add(Vec3f a, Vec3f b) {
+  return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+Vec3f sub(Vec3f a, Vec3f b) {
+  return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+Vec3f mul(Vec3f a, float s) {
+  return {a.x * s, a.y * s, a.z * s};
+}
+float dot3(Vec3f a, Vec3f b) {
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
 Vec3f cross3(Vec3f a, Vec3f b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
@@ -52,14 +60,22 @@ Mesh make_sphere(std::uint32_t target_faces, bool materials) {
   const auto k = static_cast<std::uint32_t>(
       std::max(1.0, std::round(std::sqrt(static_cast<double>(target_faces) / 20.0))));
   const float t = (1.f + std::sqrt(5.f)) / 2.f;
-  const std::array<Vec3f, 12> ico = {{{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0},
-                                      {0, -1, t}, {0, 1, t}, {0, -1, -t}, {0, 1, -t},
-                                      {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}}};
-  const std::array<Triangle, 20> faces = {{{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10},
-                                           {0, 10, 11}, {1, 5, 9},  {5, 11, 4},  {11, 10, 2},
-                                           {10, 7, 6}, {7, 1, 8},   {3, 9, 4},   {3, 4, 2},
-                                           {3, 2, 6},  {3, 6, 8},   {3, 8, 9},   {4, 9, 5},
-                                           {2, 4, 11}, {6, 2, 10},  {8, 6, 7},   {9, 8, 1}}};
+  const std::array<Vec3f, 12> ico = {{{-1, t, 0},
+                                      {1, t, 0},
+                                      {-1, -t, 0},
+                                      {1, -t, 0},
+                                      {0, -1, t},
+                                      {0, 1, t},
+                                      {0, -1, -t},
+                                      {0, 1, -t},
+                                      {t, 0, -1},
+                                      {t, 0, 1},
+                                      {-t, 0, -1},
+                                      {-t, 0, 1}}};
+  const std::array<Triangle, 20> faces = {
+      {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+       {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+       {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}}};
   Mesh mesh;
   for (const Vec3f& c : ico) mesh.positions.push_back(c);
   // Points on icosahedron edges are shared by the two faces of the edge: index them by the
@@ -84,12 +100,17 @@ Mesh make_sphere(std::uint32_t target_faces, bool materials) {
   for (const Triangle& f : faces) {
     // grid point (i, j): i steps from corner 0 towards corner 1, j towards corner 2
     std::vector<std::uint32_t> grid((k + 1) * (k + 1), 0);
-    auto at = [&](std::uint32_t i, std::uint32_t j) -> std::uint32_t& { return grid[i * (k + 1) + j]; };
+    auto at = [&](std::uint32_t i, std::uint32_t j) -> std::uint32_t& {
+      return grid[i * (k + 1) + j];
+    };
     for (std::uint32_t i = 0; i <= k; ++i) {
       for (std::uint32_t j = 0; i + j <= k; ++j) {
-        if (j == 0) at(i, j) = edge_point(f[0], f[1], i);
-        else if (i == 0) at(i, j) = edge_point(f[0], f[2], j);
-        else if (i + j == k) at(i, j) = edge_point(f[1], f[2], j);
+        if (j == 0)
+          at(i, j) = edge_point(f[0], f[1], i);
+        else if (i == 0)
+          at(i, j) = edge_point(f[0], f[2], j);
+        else if (i + j == k)
+          at(i, j) = edge_point(f[1], f[2], j);
         else {
           const float a = static_cast<float>(i) / static_cast<float>(k);
           const float b = static_cast<float>(j) / static_cast<float>(k);
@@ -148,7 +169,8 @@ void apply_stroke(Mesh& mesh, const Stroke& s, const Topology* topology) {
           float amount = s.strength * s.radius * w;
           if (s.kind == Stroke::Kind::detail) {
             const float f = s.frequency / s.radius;
-            amount *= std::sin(f * d.x + 1.3f) * std::sin(f * d.y + 0.7f) * std::sin(f * d.z + 2.1f);
+            amount *=
+                std::sin(f * d.x + 1.3f) * std::sin(f * d.y + 0.7f) * std::sin(f * d.z + 2.1f);
           }
           p = add(p, mul(normals[v], amount));
         }

@@ -81,7 +81,8 @@ void adjust_for_linear_precision(const Vec3f& x, std::span<WeightedParent> paren
   for (std::size_t k = 0; k < n; ++k) {
     const Vec3f& q = position_of(parents[k].node);
     d[k] = {double(q.x) - x.x, double(q.y) - x.y, double(q.z) - x.z};
-    for (int i = 0; i < 3; ++i) mean[i] += d[k][static_cast<std::size_t>(i)] / static_cast<double>(n);
+    for (int i = 0; i < 3; ++i)
+      mean[i] += d[k][static_cast<std::size_t>(i)] / static_cast<double>(n);
   }
   double m[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
   double scale = 0;
@@ -117,7 +118,8 @@ void adjust_for_linear_precision(const Vec3f& x, std::span<WeightedParent> paren
     total += parents[k].weight;
   }
   if (!(total > 0)) return;
-  for (std::size_t k = 0; k < n; ++k) parents[k].weight = static_cast<float>(parents[k].weight / total);
+  for (std::size_t k = 0; k < n; ++k)
+    parents[k].weight = static_cast<float>(parents[k].weight / total);
 }
 
 }  // namespace
@@ -129,9 +131,8 @@ Topology Topology::build(std::uint32_t vertex_count, std::span<const Triangle> t
   for (std::size_t f = 0; f < triangles.size(); ++f) {
     for (std::uint32_t v : triangles[f]) {
       if (v >= vertex_count) {
-        throw InvalidInput("triangle " + std::to_string(f) + " uses vertex " +
-                           std::to_string(v) + " but the mesh has " +
-                           std::to_string(vertex_count) + " vertices");
+        throw InvalidInput("triangle " + std::to_string(f) + " uses vertex " + std::to_string(v) +
+                           " but the mesh has " + std::to_string(vertex_count) + " vertices");
       }
     }
   }
@@ -277,7 +278,8 @@ Hierarchy Hierarchy::build(std::uint32_t vertex_count, std::span<const Triangle>
     coarse.child_weight_sum.assign(m, 0.f);
     coarse.tree_child_count.assign(m, 0.f);
     coarse.representative.resize(m);
-    for (std::uint32_t c = 0; c < m; ++c) coarse.representative[c] = fine.representative[selected[c]];
+    for (std::uint32_t c = 0; c < m; ++c)
+      coarse.representative[c] = fine.representative[selected[c]];
 
     for (std::uint32_t x = 0; x < n; ++x) {
       gather.clear();
@@ -314,9 +316,10 @@ Hierarchy Hierarchy::build(std::uint32_t vertex_count, std::span<const Triangle>
       for (std::size_t k = 0; k < keep; ++k) gather[k].weight /= total;
       if (precise && keep > 1) {
         const Vec3f& self = positions[fine.representative[x]];
-        adjust_for_linear_precision(self, {gather.data(), keep}, [&](std::uint32_t node) -> const Vec3f& {
-          return positions[coarse.representative[node]];
-        });
+        adjust_for_linear_precision(self, {gather.data(), keep},
+                                    [&](std::uint32_t node) -> const Vec3f& {
+                                      return positions[coarse.representative[node]];
+                                    });
         // parents the adjustment clamped to zero are dropped; heaviest first again
         std::sort(gather.begin(), gather.begin() + static_cast<std::ptrdiff_t>(keep),
                   [](const WeightedParent& a, const WeightedParent& b) {
@@ -368,7 +371,8 @@ HierarchyStats Hierarchy::stats() const {
     }
   }
   s.mean_level_ratio = levels_.size() > 1 ? ratio_sum / static_cast<double>(levels_.size() - 1) : 0;
-  s.mean_parents = child_nodes ? static_cast<double>(parent_sum) / static_cast<double>(child_nodes) : 0;
+  s.mean_parents =
+      child_nodes ? static_cast<double>(parent_sum) / static_cast<double>(child_nodes) : 0;
   s.top_nodes = levels_.empty() ? 0 : levels_.back().node_count;
   return s;
 }
@@ -394,8 +398,7 @@ std::string to_json(const HierarchyStats& s) {
     << ",\"nodes\":" << s.nodes << ",\"node_ratio\":" << s.node_ratio
     << ",\"mean_level_ratio\":" << s.mean_level_ratio << ",\"mean_parents\":" << s.mean_parents
     << ",\"top_nodes\":" << s.top_nodes << ",\"level_nodes\":[";
-  for (std::size_t i = 0; i < s.level_nodes.size(); ++i)
-    o << (i ? "," : "") << s.level_nodes[i];
+  for (std::size_t i = 0; i < s.level_nodes.size(); ++i) o << (i ? "," : "") << s.level_nodes[i];
   o << "]}";
   return o.str();
 }

@@ -47,12 +47,14 @@ Quat quat_from_rotation_matrix(const double m[9]) {
   }
   // R is orthonormal to rounding, so (w, x, y, z) is unit to rounding: no renormalisation.
   const double sign = w < 0 ? -1.0 : 1.0;
-  return {static_cast<float>(w * sign), static_cast<float>(x * sign),
-          static_cast<float>(y * sign), static_cast<float>(z * sign)};
+  return {static_cast<float>(w * sign), static_cast<float>(x * sign), static_cast<float>(y * sign),
+          static_cast<float>(z * sign)};
 }
 
 namespace {
-Quat quat_from_rotation(const double m[9]) { return quat_from_rotation_matrix(m); }
+Quat quat_from_rotation(const double m[9]) {
+  return quat_from_rotation_matrix(m);
+}
 }  // namespace
 
 Quat quat_from_matrix(const float m[9]) {
@@ -132,8 +134,8 @@ std::vector<DualQuat> vertex_isometries(const Topology& topology, std::span<cons
     if (!(base[v] == edited[v])) changed.push_back(v);
   std::vector<std::uint32_t> touched;
   detail::compute_vertex_isometries(
-      topology, base, changed, [&](std::uint32_t v) -> const Vec3f& { return edited[v]; },
-      scratch, [&](std::uint32_t v, const DualQuat& q) { result[v] = q; }, touched);
+      topology, base, changed, [&](std::uint32_t v) -> const Vec3f& { return edited[v]; }, scratch,
+      [&](std::uint32_t v, const DualQuat& q) { result[v] = q; }, touched);
   return result;
 }
 

@@ -29,15 +29,14 @@ double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-constexpr std::array<MergeMethod, 8> kMethods = {
-    MergeMethod::full,
-    MergeMethod::paper_blend,
-    MergeMethod::single_parent,
-    MergeMethod::single_level_isometry,
-    MergeMethod::multiscale_translation,
-    MergeMethod::weighted_translation,
-    MergeMethod::average,
-    MergeMethod::sum};
+constexpr std::array<MergeMethod, 8> kMethods = {MergeMethod::full,
+                                                 MergeMethod::paper_blend,
+                                                 MergeMethod::single_parent,
+                                                 MergeMethod::single_level_isometry,
+                                                 MergeMethod::multiscale_translation,
+                                                 MergeMethod::weighted_translation,
+                                                 MergeMethod::average,
+                                                 MergeMethod::sum};
 
 // ---------------------------------------------------------------------------------------
 // The two algebras the pipeline runs on.
@@ -72,8 +71,7 @@ struct DqOps {
     if (!(magnitude_sum > 0)) return identity();
     return canonical(normalized(acc));
   }
-  static bool is_identity(const Value& q) { return q == identity(); }
-  /// 1 + sum of offsets (q - 1), as accumulated by add_offset into a zero value
+  /// 1 + the sum of offsets (q - 1) that add_offset accumulated into zero(), normalised
   static Value compose_offsets(Value acc) {
     acc.real.w += 1.f;
     return canonical(normalized(acc));
@@ -138,7 +136,6 @@ struct VecOps {
       return acc;
     }
   }
-  static bool is_identity(const Value& q) { return q == identity(); }
   static Value compose_offsets(const Value& acc) { return acc; }
   static float distance(const Value& a, const Value& b) {
     float d2 = 0;
@@ -243,7 +240,8 @@ struct ParentLinks {
   }
   float weight(std::size_t level, std::uint32_t node, std::uint32_t k) const {
     return tree ? 1.f
-                : hierarchy->levels()[level].parent_weight[std::size_t{node} * hierarchy->stride() + k];
+                : hierarchy->levels()[level]
+                      .parent_weight[std::size_t{node} * hierarchy->stride() + k];
   }
   float child_weight_sum(std::size_t level, std::uint32_t node) const {
     const HierarchyLevel& l = hierarchy->levels()[level];
@@ -289,8 +287,8 @@ enum class NodeBlend { magnitude, intent };
 constexpr std::size_t kMaxDiffs = 64;
 
 template <class Ops>
-typename Ops::Value blend_residuals(NodeBlend rule, const typename Ops::Value* r,
-                                    const float* m, std::size_t n, std::uint32_t users) {
+typename Ops::Value blend_residuals(NodeBlend rule, const typename Ops::Value* r, const float* m,
+                                    std::size_t n, std::uint32_t users) {
   typename Ops::Value acc = Ops::zero();
   float magnitude_sum = 0;
   if (rule == NodeBlend::magnitude) {
@@ -386,7 +384,8 @@ void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
           residuals[j] = parent_any[j] ? Ops::residual(parent_of(j), q) : q;
           magnitudes[j] = Ops::magnitude(residuals[j]);
         }
-        const Value residual = blend_residuals<Ops>(rule, residuals, magnitudes, n_users, user_count);
+        const Value residual =
+            blend_residuals<Ops>(rule, residuals, magnitudes, n_users, user_count);
         out.val(c) = parent_any[n_users] ? Ops::compose(parent_of(n_users), residual) : residual;
       }
     });
@@ -394,11 +393,11 @@ void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
 }
 
 struct MethodTraits {
-  bool isometry;        // dual quaternions for positions
-  bool multiscale;      // use the hierarchy
-  bool tree;            // K = 1
+  bool isometry;    // dual quaternions for positions
+  bool multiscale;  // use the hierarchy
+  bool tree;        // K = 1
   TranslationBlend blend;
-  NodeBlend node_blend;  // for positions and channels
+  NodeBlend node_blend;      // for positions and channels
   bool channels_per_vertex;  // channels blend per vertex (else over the hierarchy)
 };
 
@@ -407,14 +406,22 @@ MethodTraits traits(MergeMethod m) {
     // Channels need no rotation invariance, and counting intents already keeps a broad fill
     // and a fine stroke inside it apart, so they merge per vertex (exact where one artist
     // painted, no hierarchy leak); paper-blend keeps the paper's hierarchy for them.
-    case MergeMethod::full: return {true, true, false, TranslationBlend::magnitude, NodeBlend::intent, true};
-    case MergeMethod::single_parent: return {true, true, true, TranslationBlend::magnitude, NodeBlend::intent, true};
-    case MergeMethod::single_level_isometry: return {true, false, false, TranslationBlend::magnitude, NodeBlend::intent, true};
-    case MergeMethod::multiscale_translation: return {false, true, false, TranslationBlend::magnitude, NodeBlend::intent, true};
-    case MergeMethod::weighted_translation: return {false, false, false, TranslationBlend::magnitude, NodeBlend::magnitude, true};
-    case MergeMethod::average: return {false, false, false, TranslationBlend::average, NodeBlend::magnitude, true};
-    case MergeMethod::sum: return {false, false, false, TranslationBlend::sum, NodeBlend::magnitude, true};
-    case MergeMethod::paper_blend: return {true, true, false, TranslationBlend::magnitude, NodeBlend::magnitude, false};
+    case MergeMethod::full:
+      return {true, true, false, TranslationBlend::magnitude, NodeBlend::intent, true};
+    case MergeMethod::single_parent:
+      return {true, true, true, TranslationBlend::magnitude, NodeBlend::intent, true};
+    case MergeMethod::single_level_isometry:
+      return {true, false, false, TranslationBlend::magnitude, NodeBlend::intent, true};
+    case MergeMethod::multiscale_translation:
+      return {false, true, false, TranslationBlend::magnitude, NodeBlend::intent, true};
+    case MergeMethod::weighted_translation:
+      return {false, false, false, TranslationBlend::magnitude, NodeBlend::magnitude, true};
+    case MergeMethod::average:
+      return {false, false, false, TranslationBlend::average, NodeBlend::magnitude, true};
+    case MergeMethod::sum:
+      return {false, false, false, TranslationBlend::sum, NodeBlend::magnitude, true};
+    case MergeMethod::paper_blend:
+      return {true, true, false, TranslationBlend::magnitude, NodeBlend::magnitude, false};
   }
   throw InvalidInput("unknown merge method " + std::to_string(static_cast<std::uint32_t>(m)));
 }
@@ -496,9 +503,15 @@ namespace {
 template <class Fn>
 void with_translation_ops(TranslationBlend blend, Fn&& fn) {
   switch (blend) {
-    case TranslationBlend::magnitude: fn(VecOps<TranslationBlend::magnitude>{}); break;
-    case TranslationBlend::sum: fn(VecOps<TranslationBlend::sum>{}); break;
-    case TranslationBlend::average: fn(VecOps<TranslationBlend::average>{}); break;
+    case TranslationBlend::magnitude:
+      fn(VecOps<TranslationBlend::magnitude>{});
+      break;
+    case TranslationBlend::sum:
+      fn(VecOps<TranslationBlend::sum>{});
+      break;
+    case TranslationBlend::average:
+      fn(VecOps<TranslationBlend::average>{});
+      break;
   }
 }
 
@@ -510,8 +523,8 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
   Workspace& ws = *workspace_;
   timings_ = {};
   // Per node visited: its value, its stamp and its parent links (index + weight).
-  auto count_work = [&](const auto& user_pyramids, std::uint32_t user_count, const auto& merged_pyramid,
-                        std::size_t levels, std::size_t value_bytes) {
+  auto count_work = [&](const auto& user_pyramids, std::uint32_t user_count,
+                        const auto& merged_pyramid, std::size_t levels, std::size_t value_bytes) {
     const std::size_t per_node = value_bytes + 4 + hierarchy_.stride() * 8;
     auto add = [&](const auto& pyramid) {
       for (std::size_t i = 0; i < levels; ++i) {
@@ -538,12 +551,14 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
       same = base.triangles[f] == mine[f];
     }
     if (!same)
-      throw InvalidInput("merge: the mesh's triangles differ from those the hierarchy was built for");
+      throw InvalidInput(
+          "merge: the mesh's triangles differ from those the hierarchy was built for");
   }
   if (diffs.size() > kMaxDiffs)
     throw InvalidInput("merge: " + std::to_string(diffs.size()) + " diffs given, at most " +
                        std::to_string(kMaxDiffs) + " are merged at once");
-  for (std::size_t i = 0; i < diffs.size(); ++i) validate(diffs[i], base, "diff " + std::to_string(i));
+  for (std::size_t i = 0; i < diffs.size(); ++i)
+    validate(diffs[i], base, "diff " + std::to_string(i));
   if (!(frame.scale > 0) || !std::isfinite(frame.scale))
     throw InvalidInput("merge: the frame scale must be positive and finite");
 
@@ -619,9 +634,10 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
       });
       timings_.decompose_ms += ms_since(t0);
       t0 = Clock::now();
-      mark_sorted_union(ws.dq_merged.levels[0], users,
-                        [&](std::size_t u) -> const auto& { return diffs[order[u]].positions.indices; },
-                        epoch, ws.sole);
+      mark_sorted_union(
+          ws.dq_merged.levels[0],
+          users, [&](std::size_t u) -> const auto& { return diffs[order[u]].positions.indices; },
+          epoch, ws.sole);
       blend_and_reconstruct<DqOps>(links, level_count, std::span(ws.dq_users.data(), users),
                                    ws.dq_merged, epoch, t.node_blend, ws.pool);
       timings_.blend_ms += ms_since(t0);
@@ -630,8 +646,8 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
       const auto& changed_union = ws.dq_merged.levels[0].list;  // increasing
       for (std::size_t i = 0; i < changed_union.size(); ++i) {
         const std::uint32_t v = changed_union[i];
-        const Vec3f p = from_local(ws.dq_merged.levels[0].val(v).apply(
-                                  local.to_local(base.positions[v])));
+        const Vec3f p =
+            from_local(ws.dq_merged.levels[0].val(v).apply(local.to_local(base.positions[v])));
         if (!(p == base.positions[v])) {
           merged.positions.indices.push_back(v);
           merged.positions.values.insert(merged.positions.values.end(), {p.x, p.y, p.z});
@@ -666,12 +682,12 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
         timings_.decompose_ms += ms_since(t0);
         t0 = Clock::now();
         auto& out = pyramid(ws.vec_merged);
-        mark_sorted_union(out.levels[0], users,
-                          [&](std::size_t u) -> const auto& { return diffs[order[u]].positions.indices; },
-                          epoch, ws.sole);
-        blend_and_reconstruct<Ops>(
-            links, level_count,
-            std::span(ws.vec_users.data(), users), out, epoch, t.node_blend, ws.pool);
+        mark_sorted_union(
+            out.levels[0],
+            users, [&](std::size_t u) -> const auto& { return diffs[order[u]].positions.indices; },
+            epoch, ws.sole);
+        blend_and_reconstruct<Ops>(links, level_count, std::span(ws.vec_users.data(), users), out,
+                                   epoch, t.node_blend, ws.pool);
         timings_.blend_ms += ms_since(t0);
         count_work(ws.vec_users, users, ws.vec_merged, level_count, sizeof(Vec4));
         t0 = Clock::now();
@@ -724,8 +740,10 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
             const std::uint32_t v = cd.change.indices[i];
             Value d;
             for (std::uint32_t k = 0; k < width; ++k) {
-              const float b = to_linear(channel.desc.linearisation, channel.values[std::size_t{v} * width + k]);
-              const float e = to_linear(channel.desc.linearisation, cd.change.values[std::size_t{i} * width + k]);
+              const float b =
+                  to_linear(channel.desc.linearisation, channel.values[std::size_t{v} * width + k]);
+              const float e = to_linear(channel.desc.linearisation,
+                                        cd.change.values[std::size_t{i} * width + k]);
               d.v[k] = e - b;
             }
             level0.mark(v, epoch);
@@ -733,15 +751,14 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
           }
         }
       }
-      mark_sorted_union(out.levels[0], users,
-                        [&](std::size_t u) -> const auto& { return *changed_lists[u]; }, epoch,
-                        ws.sole);
+      mark_sorted_union(
+          out.levels[0], users, [&](std::size_t u) -> const auto& { return *changed_lists[u]; },
+          epoch, ws.sole);
       ws.pool.run(users, [&](std::size_t u) {
         decompose<Ops>(links, channel_levels, pyramid(ws.vec_users[u]), epoch);
       });
-      blend_and_reconstruct<Ops>(
-          links, channel_levels,
-          std::span(ws.vec_users.data(), users), out, epoch, channel_blend, ws.pool);
+      blend_and_reconstruct<Ops>(links, channel_levels, std::span(ws.vec_users.data(), users), out,
+                                 epoch, channel_blend, ws.pool);
       const auto& list = out.levels[0].list;  // increasing
       for (std::size_t i = 0; i < list.size(); ++i) {
         const std::uint32_t v = list[i];
@@ -791,14 +808,22 @@ MergeFrame MergeFrame::fit(std::span<const Vec3f> positions) {
 
 std::string_view to_string(MergeMethod method) {
   switch (method) {
-    case MergeMethod::full: return "full";
-    case MergeMethod::single_parent: return "single-parent";
-    case MergeMethod::single_level_isometry: return "single-level-isometry";
-    case MergeMethod::multiscale_translation: return "multiscale-translation";
-    case MergeMethod::weighted_translation: return "weighted-translation";
-    case MergeMethod::average: return "average";
-    case MergeMethod::sum: return "sum";
-    case MergeMethod::paper_blend: return "paper-blend";
+    case MergeMethod::full:
+      return "full";
+    case MergeMethod::single_parent:
+      return "single-parent";
+    case MergeMethod::single_level_isometry:
+      return "single-level-isometry";
+    case MergeMethod::multiscale_translation:
+      return "multiscale-translation";
+    case MergeMethod::weighted_translation:
+      return "weighted-translation";
+    case MergeMethod::average:
+      return "average";
+    case MergeMethod::sum:
+      return "sum";
+    case MergeMethod::paper_blend:
+      return "paper-blend";
   }
   return "unknown";
 }
@@ -811,7 +836,9 @@ MergeMethod merge_method_from_string(std::string_view name) {
   throw InvalidInput("unknown merge method '" + std::string(name) + "' (valid: " + valid + ")");
 }
 
-std::span<const MergeMethod> all_merge_methods() { return kMethods; }
+std::span<const MergeMethod> all_merge_methods() {
+  return kMethods;
+}
 
 Mesh merge_meshes(const Mesh& base, std::span<const Mesh> edits, MergeMethod method,
                   std::uint32_t max_parents) {

@@ -10,7 +10,8 @@
 namespace csculpt {
 namespace {
 
-Mesh with(const Mesh& base, std::initializer_list<Stroke> strokes, const Topology* topology = nullptr) {
+Mesh with(const Mesh& base, std::initializer_list<Stroke> strokes,
+          const Topology* topology = nullptr) {
   Mesh m = base;
   for (const Stroke& s : strokes) apply_stroke(m, s, topology);
   return m;
@@ -112,7 +113,8 @@ std::vector<Scenario> make_scenarios(std::uint32_t faces) {
       MergeMethod::paper_blend};
   std::vector<Scenario> out;
   {
-    Scenario s{"disjoint", "a grab on one side, fine detail on the other", sphere, {}, true, {}, {}};
+    Scenario s{"disjoint", "a grab on one side, fine detail on the other", sphere, {}, true, {},
+               {}};
     const Stroke a = grab(px, 0.6f, px, 0.3f), b = detail(nx, 0.4f, 0.08f);
     s.edits = {with(sphere, {a}), with(sphere, {b})};
     s.expected = with(sphere, {b, a});
@@ -120,7 +122,8 @@ std::vector<Scenario> make_scenarios(std::uint32_t faces) {
     out.push_back(std::move(s));
   }
   {
-    Scenario s{"identical", "both artists make the same inflate and detail", sphere, {}, true, {}, {}};
+    Scenario s{"identical", "both artists make the same inflate and detail", sphere, {}, true, {},
+               {}};
     const Mesh e = with(sphere, {inflate(pz, 0.6f, 0.15f), detail(pz, 0.3f, 0.06f)});
     s.edits = {e, e};
     s.expected = e;
@@ -128,7 +131,8 @@ std::vector<Scenario> make_scenarios(std::uint32_t faces) {
     out.push_back(std::move(s));
   }
   {
-    Scenario s{"translation+detail", "a large soft grab over a fine detail", sphere, {}, true, {}, {}};
+    Scenario s{
+        "translation+detail", "a large soft grab over a fine detail", sphere, {}, true, {}, {}};
     const Stroke a = grab(pz, 1.2f, px, 0.25f), b = detail(pz, 0.35f, 0.08f);
     s.edits = {with(sphere, {a}), with(sphere, {b})};
     s.expected = with(sphere, {b, a});
@@ -136,7 +140,8 @@ std::vector<Scenario> make_scenarios(std::uint32_t faces) {
     out.push_back(std::move(s));
   }
   {
-    Scenario s{"twist+detail", "a coarse twist of the cap over a fine detail", sphere, {}, true, {}, {}};
+    Scenario s{
+        "twist+detail", "a coarse twist of the cap over a fine detail", sphere, {}, true, {}, {}};
     const Stroke a = twist(pz, 1.2f, pz, 1.2f), b = detail({0.6f, 0, 0.8f}, 0.35f, 0.08f);
     s.edits = {with(sphere, {a}), with(sphere, {b})};
     s.expected = with(sphere, {b, a});
@@ -145,7 +150,13 @@ std::vector<Scenario> make_scenarios(std::uint32_t faces) {
     out.push_back(std::move(s));
   }
   {
-    Scenario s{"bend+detail", "the upper half bent by 45 degrees over a fine detail", sphere, {}, true, {}, {}};
+    Scenario s{"bend+detail",
+               "the upper half bent by 45 degrees over a fine detail",
+               sphere,
+               {},
+               true,
+               {},
+               {}};
     const Stroke a = bend({0, 0, 0}, 1.0f, py, pz, 0.8f), b = detail({0.6f, 0, 0.8f}, 0.35f, 0.08f);
     s.edits = {with(sphere, {a}), with(sphere, {b})};
     s.expected = with(sphere, {b, a});
@@ -155,12 +166,25 @@ std::vector<Scenario> make_scenarios(std::uint32_t faces) {
     out.push_back(std::move(s));
   }
   {
-    Scenario s{"overlapping-coarse", "two large grabs in different directions overlapping", sphere, {}, false, {}, {}};
-    s.edits = {with(sphere, {grab(pz, 1.0f, px, 0.3f)}), with(sphere, {grab({0.5f, 0, 0.86f}, 1.0f, py, 0.3f)})};
+    Scenario s{"overlapping-coarse",
+               "two large grabs in different directions overlapping",
+               sphere,
+               {},
+               false,
+               {},
+               {}};
+    s.edits = {with(sphere, {grab(pz, 1.0f, px, 0.3f)}),
+               with(sphere, {grab({0.5f, 0, 0.86f}, 1.0f, py, 0.3f)})};
     out.push_back(std::move(s));
   }
   {
-    Scenario s{"paint-overlap", "red metal and blue plastic painted over overlapping discs", sphere, {}, true, {}, {}};
+    Scenario s{"paint-overlap",
+               "red metal and blue plastic painted over overlapping discs",
+               sphere,
+               {},
+               true,
+               {},
+               {}};
     const Stroke a = paint(pz, 0.5f, {0.9f, 0.1f, 0.1f}, 0.2f, 1.f);
     const Stroke b = paint({0.7f, 0, 0.7f}, 0.5f, {0.1f, 0.2f, 0.9f}, 0.8f, 0.f);
     s.edits = {with(sphere, {a}), with(sphere, {b})};
@@ -169,7 +193,13 @@ std::vector<Scenario> make_scenarios(std::uint32_t faces) {
     out.push_back(std::move(s));
   }
   {
-    Scenario s{"four-users", "a coarse twist with a detail on it, a grab elsewhere, and paint", sphere, {}, true, {}, {}};
+    Scenario s{"four-users",
+               "a coarse twist with a detail on it, a grab elsewhere, and paint",
+               sphere,
+               {},
+               true,
+               {},
+               {}};
     const Stroke t = twist(pz, 1.0f, pz, 0.9f), d = detail({0.5f, 0, 0.86f}, 0.3f, 0.07f),
                  g = grab(nx, 0.8f, py, 0.25f), p = paint(py, 0.6f, {0.2f, 0.8f, 0.2f}, 0.5f, 0.f);
     s.edits = {with(sphere, {t}), with(sphere, {d}), with(sphere, {g}), with(sphere, {p})};
@@ -224,7 +254,8 @@ ScenarioScore score(const Scenario& sc, const Mesh& merged, const Topology& topo
     s.rel_err = size > 0 ? std::sqrt(err / size) : 0;
   }
   double rough_in = 0;
-  for (const Mesh& e : sc.edits) rough_in = std::max(rough_in, displacement_roughness(sc.base, e, topology));
+  for (const Mesh& e : sc.edits)
+    rough_in = std::max(rough_in, displacement_roughness(sc.base, e, topology));
   s.roughness = rough_in > 0 ? displacement_roughness(sc.base, merged, topology) / rough_in : 0;
   if (sc.has_expected) {
     // Material channels: compare where exactly one edit painted (elsewhere intent is shared).
@@ -243,8 +274,9 @@ ScenarioScore score(const Scenario& sc, const Mesh& merged, const Topology& topo
             }
         if (painters != 1) continue;
         for (std::uint32_t k = 0; k < w; ++k) {
-          const double d = double(to_linear(base_c.desc.linearisation, merged.channels[c].values[v * w + k])) -
-                           to_linear(base_c.desc.linearisation, sc.expected.channels[c].values[v * w + k]);
+          const double d =
+              double(to_linear(base_c.desc.linearisation, merged.channels[c].values[v * w + k])) -
+              to_linear(base_c.desc.linearisation, sc.expected.channels[c].values[v * w + k]);
           err += d * d;
           ++count;
         }

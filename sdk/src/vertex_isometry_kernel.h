@@ -30,8 +30,8 @@ struct Frame {
 /// in those frames (det M > 0). The closest rotation is invariant under the orthogonal
 /// factors, and that of a 2x2 map [[a, b], [c, d]] is the plane rotation by
 /// atan2(c - b, a + d); hence R = Fb Rz(theta) Fa^T exactly, with no iteration.
-inline bool face_rotation_kernel(const Vec3f& a0, const Vec3f& a1, const Vec3f& a2,
-                                 const Vec3f& b0, const Vec3f& b1, const Vec3f& b2, Quat& out) {
+inline bool face_rotation_kernel(const Vec3f& a0, const Vec3f& a1, const Vec3f& a2, const Vec3f& b0,
+                                 const Vec3f& b1, const Vec3f& b2, Quat& out) {
   struct D3 {
     double x, y, z;
   };
@@ -71,11 +71,12 @@ inline bool face_rotation_kernel(const Vec3f& a0, const Vec3f& a1, const Vec3f& 
   // x' = c xb + s yb, y' = -s xb + c yb; R = x' xa^T + y' ya^T + nb na^T
   const D3 xr{c * xb.x + s * yb.x, c * xb.y + s * yb.y, c * xb.z + s * yb.z};
   const D3 yr{c * yb.x - s * xb.x, c * yb.y - s * xb.y, c * yb.z - s * xb.z};
-  const double r[9] = {xr.x * xa.x + yr.x * ya.x + nb.x * na.x, xr.x * xa.y + yr.x * ya.y + nb.x * na.y,
-                       xr.x * xa.z + yr.x * ya.z + nb.x * na.z, xr.y * xa.x + yr.y * ya.x + nb.y * na.x,
-                       xr.y * xa.y + yr.y * ya.y + nb.y * na.y, xr.y * xa.z + yr.y * ya.z + nb.y * na.z,
-                       xr.z * xa.x + yr.z * ya.x + nb.z * na.x, xr.z * xa.y + yr.z * ya.y + nb.z * na.y,
-                       xr.z * xa.z + yr.z * ya.z + nb.z * na.z};
+  const double r[9] = {
+      xr.x * xa.x + yr.x * ya.x + nb.x * na.x, xr.x * xa.y + yr.x * ya.y + nb.x * na.y,
+      xr.x * xa.z + yr.x * ya.z + nb.x * na.z, xr.y * xa.x + yr.y * ya.x + nb.y * na.x,
+      xr.y * xa.y + yr.y * ya.y + nb.y * na.y, xr.y * xa.z + yr.y * ya.z + nb.y * na.z,
+      xr.z * xa.x + yr.z * ya.x + nb.z * na.x, xr.z * xa.y + yr.z * ya.y + nb.z * na.y,
+      xr.z * xa.z + yr.z * ya.z + nb.z * na.z};
   out = quat_from_rotation_matrix(r);
   return true;
 }
@@ -83,9 +84,9 @@ inline bool face_rotation_kernel(const Vec3f& a0, const Vec3f& a1, const Vec3f& 
 struct VertexIsometryScratch {
   std::vector<std::uint32_t> face_stamp;
   std::vector<std::uint32_t> vertex_stamp;
-  std::vector<Quat> rotation_sum;  ///< sum of (q_face - 1) over changed faces
-  std::vector<std::uint32_t> faces;   ///< faces around changed vertices, first-touch order
-  std::vector<Quat> face_offset;      ///< per listed face: q_face - 1 (zero if degenerate)
+  std::vector<Quat> rotation_sum;    ///< sum of (q_face - 1) over changed faces
+  std::vector<std::uint32_t> faces;  ///< faces around changed vertices, first-touch order
+  std::vector<Quat> face_offset;     ///< per listed face: q_face - 1 (zero if degenerate)
   std::uint32_t epoch = 0;
 
   void resize(std::size_t vertex_count, std::size_t face_count) {
@@ -145,11 +146,10 @@ void compute_vertex_isometries(const Topology& topology, std::span<const Vec3f> 
   for (std::size_t k = 0; k < scratch.faces.size(); ++k) {
     const Triangle& t = topology.triangles[scratch.faces[k]];
     Quat q;
-    scratch.face_offset[k] =
-        face_rotation_kernel(base[t[0]], base[t[1]], base[t[2]], edited(t[0]), edited(t[1]),
-                             edited(t[2]), q)
-            ? Quat{q.w - 1.f, q.x, q.y, q.z}
-            : Quat{0, 0, 0, 0};
+    scratch.face_offset[k] = face_rotation_kernel(base[t[0]], base[t[1]], base[t[2]], edited(t[0]),
+                                                  edited(t[1]), edited(t[2]), q)
+                                 ? Quat{q.w - 1.f, q.x, q.y, q.z}
+                                 : Quat{0, 0, 0, 0};
   }
   // 3. summed at their vertices
   for (std::size_t k = 0; k < scratch.faces.size(); ++k)

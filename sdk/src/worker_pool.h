@@ -59,7 +59,8 @@ class WorkerPool {
     drain();
     // wait for the workers: spin first, sleep if it takes long
     const auto until = std::chrono::steady_clock::now() + std::chrono::microseconds(200);
-    while (active_.load() != 0 && std::chrono::steady_clock::now() < until) std::this_thread::yield();
+    while (active_.load() != 0 && std::chrono::steady_clock::now() < until)
+      std::this_thread::yield();
     if (active_.load() != 0) {
       std::unique_lock<std::mutex> lock(mutex_);
       done_.wait(lock, [this] { return active_.load() == 0; });

@@ -475,7 +475,8 @@ TEST(HierarchyWeights, LinearPrecisionOnlyReweights) {
       for (std::uint32_t k = 0; k < la.parent_count[x]; ++k) {
         const std::uint32_t p = la.parent[std::size_t{x} * K + k];
         bool found = false;
-        for (std::uint32_t q = 0; q < lb.parent_count[x]; ++q) found |= lb.parent[std::size_t{x} * K + q] == p;
+        for (std::uint32_t q = 0; q < lb.parent_count[x]; ++q)
+          found |= lb.parent[std::size_t{x} * K + q] == p;
         ASSERT_TRUE(found) << "level " << i << " node " << x << " gained parent " << p;
         if (k > 0) {
           ASSERT_GE(la.parent_weight[std::size_t{x} * K + k - 1],

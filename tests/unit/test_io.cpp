@@ -34,7 +34,6 @@ using test::first_difference;
 
 const fs::path kModels = CSCULPT_TEST_MODELS;
 
-
 bool starts_with(const std::string& s, const std::string& prefix) {
   return s.rfind(prefix, 0) == 0;
 }
@@ -75,7 +74,6 @@ class IoFiles : public ::testing::Test {
 
   fs::path dir_;
 };
-
 
 // ------------------------------------------------------------------------------------------
 // assimp-testmodels

@@ -11,11 +11,11 @@
 #include <vector>
 
 #include "csculpt/dual_quat.h"
-#include "csculpt/random.h"
 #include "csculpt/generate.h"
 #include "csculpt/hierarchy.h"
 #include "csculpt/isometry.h"
 #include "csculpt/mesh.h"
+#include "csculpt/random.h"
 #include "test_support.h"
 
 namespace csculpt {
@@ -567,7 +567,8 @@ TEST(IsometryFaceRotation, ClosedFormEqualsSvdOfPaperMatrix) {
   };
   int checked = 0;
   for (int trial = 0; trial < 5000; ++trial) {
-    const csculpt::Vec3f a0{next(), next(), next()}, a1{next(), next(), next()}, a2{next(), next(), next()};
+    const csculpt::Vec3f a0{next(), next(), next()}, a1{next(), next(), next()},
+        a2{next(), next(), next()};
     const float amount = trial % 2 ? 0.05f : 0.6f;
     const csculpt::Vec3f b0{a0.x + amount * next(), a0.y + amount * next(), a0.z + amount * next()};
     const csculpt::Vec3f b1{a1.x + amount * next(), a1.y + amount * next(), a1.z + amount * next()};

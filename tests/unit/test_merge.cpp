@@ -830,7 +830,6 @@ TEST(MergeMaterials, DisjointPaintsExactIdenticalIdempotentOverlapsInRange) {
 
 // ---- 10. bad input -----------------------------------------------------------------------
 
-
 bool contains(const std::string& haystack, const std::string& needle) {
   std::string h = haystack, n = needle;
   for (char& ch : h) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));

@@ -288,7 +288,6 @@ TEST(MeshBbox, Diagonal) {
 // ------------------------------------------------------------------------------------------
 // OpenMesh interop
 
-
 TEST(OpenMeshInterop, RoundTripKeepsEverything) {
   const Mesh m = test::make_icosphere_with_channels();
   const OpenMeshTriMesh om = to_openmesh(m);

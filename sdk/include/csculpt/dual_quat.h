@@ -17,10 +17,9 @@ struct Quat {
 };
 
 inline Quat operator*(const Quat& a, const Quat& b) {
-  return {a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z,
-          a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
-          a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x,
-          a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w};
+  return {
+      a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
+      a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w};
 }
 inline Quat operator+(const Quat& a, const Quat& b) {
   return {a.w + b.w, a.x + b.x, a.y + b.y, a.z + b.z};
@@ -28,8 +27,12 @@ inline Quat operator+(const Quat& a, const Quat& b) {
 inline Quat operator-(const Quat& a, const Quat& b) {
   return {a.w - b.w, a.x - b.x, a.y - b.y, a.z - b.z};
 }
-inline Quat operator*(float s, const Quat& a) { return {s * a.w, s * a.x, s * a.y, s * a.z}; }
-inline Quat conjugate(const Quat& a) { return {a.w, -a.x, -a.y, -a.z}; }
+inline Quat operator*(float s, const Quat& a) {
+  return {s * a.w, s * a.x, s * a.y, s * a.z};
+}
+inline Quat conjugate(const Quat& a) {
+  return {a.w, -a.x, -a.y, -a.z};
+}
 inline float dot(const Quat& a, const Quat& b) {
   return a.w * b.w + a.x * b.x + a.y * b.y + a.z * b.z;
 }
@@ -45,8 +48,8 @@ inline Vec3f rotate(const Quat& q, const Vec3f& v) {
 }
 
 struct DualQuat {
-  Quat real;                 ///< rotation
-  Quat dual{0, 0, 0, 0};     ///< 1/2 (0, t) * real
+  Quat real;              ///< rotation
+  Quat dual{0, 0, 0, 0};  ///< 1/2 (0, t) * real
 
   static constexpr DualQuat identity() { return {}; }
   friend bool operator==(const DualQuat&, const DualQuat&) = default;
@@ -83,7 +86,9 @@ inline DualQuat operator*(const DualQuat& a, const DualQuat& b) {
 }
 
 /// Inverse of a unit dual quaternion: the quaternion conjugate of both parts.
-inline DualQuat inverse(const DualQuat& q) { return {conjugate(q.real), conjugate(q.dual)}; }
+inline DualQuat inverse(const DualQuat& q) {
+  return {conjugate(q.real), conjugate(q.dual)};
+}
 
 /// Sign-canonical form: the paper's rule (§3.1) keeps the real primal component positive, so
 /// that q and -q (the same motion) blend alike and the sum of many operands is associative.
@@ -98,17 +103,25 @@ struct DualQuatSum {
   float v[8] = {0, 0, 0, 0, 0, 0, 0, 0};
 
   void add(float weight, const DualQuat& q) {
-    v[0] += weight * q.real.w; v[1] += weight * q.real.x;
-    v[2] += weight * q.real.y; v[3] += weight * q.real.z;
-    v[4] += weight * q.dual.w; v[5] += weight * q.dual.x;
-    v[6] += weight * q.dual.y; v[7] += weight * q.dual.z;
+    v[0] += weight * q.real.w;
+    v[1] += weight * q.real.x;
+    v[2] += weight * q.real.y;
+    v[3] += weight * q.real.z;
+    v[4] += weight * q.dual.w;
+    v[5] += weight * q.dual.x;
+    v[6] += weight * q.dual.y;
+    v[7] += weight * q.dual.z;
   }
   /// Adds weight * (q - 1): the sum over a set where all absent members are the identity.
   void add_offset(float weight, const DualQuat& q) {
-    v[0] += weight * (q.real.w - 1.f); v[1] += weight * q.real.x;
-    v[2] += weight * q.real.y;        v[3] += weight * q.real.z;
-    v[4] += weight * q.dual.w;        v[5] += weight * q.dual.x;
-    v[6] += weight * q.dual.y;        v[7] += weight * q.dual.z;
+    v[0] += weight * (q.real.w - 1.f);
+    v[1] += weight * q.real.x;
+    v[2] += weight * q.real.y;
+    v[3] += weight * q.real.z;
+    v[4] += weight * q.dual.w;
+    v[5] += weight * q.dual.x;
+    v[6] += weight * q.dual.y;
+    v[7] += weight * q.dual.z;
   }
 };
 

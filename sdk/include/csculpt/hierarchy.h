@@ -66,11 +66,11 @@ struct HierarchyStats {
   std::uint32_t vertices = 0;
   std::uint32_t faces = 0;
   std::uint32_t levels = 0;
-  std::uint64_t nodes = 0;       ///< over all levels
-  double node_ratio = 0;         ///< nodes / vertices (paper: about 1.33)
-  double mean_level_ratio = 0;   ///< mean |L_{i+1}| / |L_i| (paper: 0.25 to 0.5)
-  double mean_parents = 0;       ///< over all non-coarsest nodes
-  std::uint32_t top_nodes = 0;   ///< nodes of the coarsest level (one per component)
+  std::uint64_t nodes = 0;      ///< over all levels
+  double node_ratio = 0;        ///< nodes / vertices (paper: about 1.33)
+  double mean_level_ratio = 0;  ///< mean |L_{i+1}| / |L_i| (paper: 0.25 to 0.5)
+  double mean_parents = 0;      ///< over all non-coarsest nodes
+  std::uint32_t top_nodes = 0;  ///< nodes of the coarsest level (one per component)
   std::vector<std::uint32_t> level_nodes;
 };
 

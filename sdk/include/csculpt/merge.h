@@ -21,12 +21,12 @@ enum class MergeMethod : std::uint32_t {
   /// isometries, multiscale, K blended parents; residuals blended per node by magnitude and
   /// counted once per intent (identical ones blend, independent ones add)
   full = 0,
-  single_parent = 1,          ///< isometries, multiscale, a tree (K = 1)
-  single_level_isometry = 2,  ///< isometries blended per vertex, no hierarchy
-  multiscale_translation = 3, ///< translations, multiscale, K parents (no rotation)
-  weighted_translation = 4,   ///< translations blended per vertex by magnitude (paper eq. 1)
-  average = 5,                ///< mean of the translations
-  sum = 6,                    ///< sum of the translations
+  single_parent = 1,           ///< isometries, multiscale, a tree (K = 1)
+  single_level_isometry = 2,   ///< isometries blended per vertex, no hierarchy
+  multiscale_translation = 3,  ///< translations, multiscale, K parents (no rotation)
+  weighted_translation = 4,    ///< translations blended per vertex by magnitude (paper eq. 1)
+  average = 5,                 ///< mean of the translations
+  sum = 6,                     ///< sum of the translations
   /// `full` with the paper's node blend exactly: normalize(sum_j |q_j - 1| q_j)
   paper_blend = 7,
 };
@@ -78,7 +78,8 @@ class Merger {
   /// The work runs on a pool of the machine's hardware threads owned by this Merger.
   Diff merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod method,
              const MergeFrame& frame);
-  Diff merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod method = MergeMethod::full) {
+  Diff merge(const Mesh& base, std::span<const Diff> diffs,
+             MergeMethod method = MergeMethod::full) {
     return merge(base, diffs, method, MergeFrame::fit(base.positions));
   }
 

@@ -19,7 +19,9 @@ struct SplitMix64 {
   double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
   double range(double a, double b) { return a + (b - a) * uniform(); }
   /// uniform in [0, 1) with 24 random bits
-  float uniform_float() { return static_cast<float>(next() >> 40) / static_cast<float>(1ull << 24); }
+  float uniform_float() {
+    return static_cast<float>(next() >> 40) / static_cast<float>(1ull << 24);
+  }
   float range_float(float a, float b) { return a + (b - a) * uniform_float(); }
 };
 

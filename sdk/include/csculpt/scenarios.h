@@ -29,9 +29,9 @@ struct Scenario {
 std::vector<Scenario> make_scenarios(std::uint32_t faces = 40000);
 
 struct ScenarioScore {
-  double rel_err = 0;    ///< RMS distance to expected over the finest edit's support,
-                         ///< relative to that edit's RMS size (0 = intent kept whole)
-  double roughness = 0;  ///< merged displacement roughness / the roughest input's (~1 = smooth)
+  double rel_err = 0;      ///< RMS distance to expected over the finest edit's support,
+                           ///< relative to that edit's RMS size (0 = intent kept whole)
+  double roughness = 0;    ///< merged displacement roughness / the roughest input's (~1 = smooth)
   double channel_err = 0;  ///< RMS error of material channels (linear) against expected
 };
 
