@@ -6,29 +6,10 @@
 
 #include "csculpt/dual_quat.h"
 #include "csculpt/random.h"
+#include "csculpt/vec3.h"
 
 namespace csculpt {
 namespace {
-
-Vec3f add(Vec3f a, Vec3f b) {
-  return {a.x + b.x, a.y + b.y, a.z + b.z};
-}
-Vec3f sub(Vec3f a, Vec3f b) {
-  return {a.x - b.x, a.y - b.y, a.z - b.z};
-}
-Vec3f mul(Vec3f a, float s) {
-  return {a.x * s, a.y * s, a.z * s};
-}
-float dot3(Vec3f a, Vec3f b) {
-  return a.x * b.x + a.y * b.y + a.z * b.z;
-}
-Vec3f cross3(Vec3f a, Vec3f b) {
-  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-Vec3f unit(Vec3f a) {
-  const float n = std::sqrt(dot3(a, a));
-  return n > 0 ? mul(a, 1.f / n) : a;
-}
 
 float falloff(float d, float r) {
   if (d >= r) return 0.f;
@@ -43,8 +24,8 @@ struct Rng : SplitMix64 {
   Vec3f direction() {
     for (;;) {
       const Vec3f v{range(-1, 1), range(-1, 1), range(-1, 1)};
-      const float n2 = dot3(v, v);
-      if (n2 > 1e-4f && n2 <= 1.f) return mul(v, 1.f / std::sqrt(n2));
+      const float n2 = dot(v, v);
+      if (n2 > 1e-4f && n2 <= 1.f) return scale(v, 1.f / std::sqrt(n2));
     }
   }
 };
@@ -92,7 +73,7 @@ Mesh make_sphere(std::uint32_t target_faces, bool materials) {
       it->second = static_cast<std::uint32_t>(mesh.positions.size());
       for (std::uint32_t i = 1; i < k; ++i) {
         const float w = static_cast<float>(i) / static_cast<float>(k);
-        mesh.positions.push_back(add(mul(ico[lo], 1 - w), mul(ico[hi], w)));
+        mesh.positions.push_back(add(scale(ico[lo], 1 - w), scale(ico[hi], w)));
       }
     }
     return it->second + s - 1;
@@ -116,7 +97,7 @@ Mesh make_sphere(std::uint32_t target_faces, bool materials) {
           const float b = static_cast<float>(j) / static_cast<float>(k);
           at(i, j) = static_cast<std::uint32_t>(mesh.positions.size());
           mesh.positions.push_back(
-              add(add(mul(ico[f[0]], 1 - a - b), mul(ico[f[1]], a)), mul(ico[f[2]], b)));
+              add(add(scale(ico[f[0]], 1 - a - b), scale(ico[f[1]], a)), scale(ico[f[2]], b)));
         }
       }
     }
@@ -142,7 +123,7 @@ std::vector<Vec3f> vertex_normals(const Mesh& mesh) {
   std::vector<Vec3f> n(mesh.vertex_count(), Vec3f{0, 0, 0});
   for (const Triangle& t : mesh.triangles) {
     const Vec3f& a = mesh.positions[t[0]];
-    const Vec3f c = cross3(sub(mesh.positions[t[1]], a), sub(mesh.positions[t[2]], a));
+    const Vec3f c = cross(sub(mesh.positions[t[1]], a), sub(mesh.positions[t[2]], a));
     for (std::uint32_t v : t) n[v] = add(n[v], c);
   }
   for (Vec3f& v : n) v = unit(v);
@@ -161,10 +142,10 @@ void apply_stroke(Mesh& mesh, const Stroke& s, const Topology* topology) {
       for (std::size_t v = 0; v < n; ++v) {
         Vec3f& p = mesh.positions[v];
         const Vec3f d = sub(p, s.center);
-        const float w = falloff(std::sqrt(dot3(d, d)), s.radius);
+        const float w = falloff(std::sqrt(dot(d, d)), s.radius);
         if (w == 0.f) continue;
         if (s.kind == Stroke::Kind::grab) {
-          p = add(p, mul(axis, s.strength * s.radius * w));
+          p = add(p, scale(axis, s.strength * s.radius * w));
         } else {
           float amount = s.strength * s.radius * w;
           if (s.kind == Stroke::Kind::detail) {
@@ -172,7 +153,7 @@ void apply_stroke(Mesh& mesh, const Stroke& s, const Topology* topology) {
             amount *=
                 std::sin(f * d.x + 1.3f) * std::sin(f * d.y + 0.7f) * std::sin(f * d.z + 2.1f);
           }
-          p = add(p, mul(normals[v], amount));
+          p = add(p, scale(normals[v], amount));
         }
       }
       break;
@@ -185,9 +166,9 @@ void apply_stroke(Mesh& mesh, const Stroke& s, const Topology* topology) {
         const Vec3f d = sub(p, s.center);
         float angle;
         if (s.kind == Stroke::Kind::twist) {
-          angle = s.strength * falloff(std::sqrt(dot3(d, d)), s.radius);
+          angle = s.strength * falloff(std::sqrt(dot(d, d)), s.radius);
         } else {
-          const float along = std::clamp(dot3(d, dir) / s.radius, 0.f, 1.f);
+          const float along = std::clamp(dot(d, dir) / s.radius, 0.f, 1.f);
           angle = s.strength * along * along * (3 - 2 * along);  // smoothstep
         }
         if (angle == 0.f) continue;
@@ -200,13 +181,13 @@ void apply_stroke(Mesh& mesh, const Stroke& s, const Topology* topology) {
       const std::vector<Vec3f> before = mesh.positions;
       for (std::size_t v = 0; v < n; ++v) {
         const Vec3f d = sub(before[v], s.center);
-        const float w = falloff(std::sqrt(dot3(d, d)), s.radius) * std::clamp(s.strength, 0.f, 1.f);
+        const float w = falloff(std::sqrt(dot(d, d)), s.radius) * std::clamp(s.strength, 0.f, 1.f);
         const auto row = topology->vertex_vertices.row(v);
         if (w == 0.f || row.empty()) continue;
         Vec3f mean{0, 0, 0};
         for (std::uint32_t u : row) mean = add(mean, before[u]);
-        mean = mul(mean, 1.f / static_cast<float>(row.size()));
-        mesh.positions[v] = add(before[v], mul(sub(mean, before[v]), w));
+        mean = scale(mean, 1.f / static_cast<float>(row.size()));
+        mesh.positions[v] = add(before[v], scale(sub(mean, before[v]), w));
       }
       break;
     }
@@ -221,7 +202,7 @@ void apply_stroke(Mesh& mesh, const Stroke& s, const Topology* topology) {
       Channel& metal = mesh.channels[static_cast<std::size_t>(mesh.find_channel("metallic"))];
       for (std::size_t v = 0; v < n; ++v) {
         const Vec3f d = sub(mesh.positions[v], s.center);
-        const float w = falloff(std::sqrt(dot3(d, d)), s.radius) * std::clamp(s.strength, 0.f, 1.f);
+        const float w = falloff(std::sqrt(dot(d, d)), s.radius) * std::clamp(s.strength, 0.f, 1.f);
         if (w == 0.f) continue;
         for (int c = 0; c < 3; ++c) {
           float& a = albedo.values[3 * v + static_cast<std::size_t>(c)];

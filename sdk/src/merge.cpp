@@ -46,15 +46,8 @@ struct DqOps {
   using Value = DualQuat;
   static Value identity() { return DualQuat::identity(); }
   static Value zero() { return {{0, 0, 0, 0}, {0, 0, 0, 0}}; }
-  static void add(Value& acc, float w, const Value& q) {
-    acc.real = acc.real + w * q.real;
-    acc.dual = acc.dual + w * q.dual;
-  }
-  /// acc += w (q - 1): sums over sets whose absent members are the identity
-  static void add_offset(Value& acc, float w, const Value& q) {
-    acc.real = acc.real + w * Quat{q.real.w - 1.f, q.real.x, q.real.y, q.real.z};
-    acc.dual = acc.dual + w * q.dual;
-  }
+  static void add(Value& acc, float w, const Value& q) { add_scaled(acc, w, q); }
+  static void add_offset(Value& acc, float w, const Value& q) { add_scaled_offset(acc, w, q); }
   /// Average of all children: the absent ones (identity) weigh total - listed.
   static Value finish_average(Value acc, float total_weight) {
     acc.real.w += total_weight;
@@ -659,11 +652,10 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
         using Ops = decltype(ops);
         using Value = typename Ops::Value;
         if (ws.vec_users.size() < users) ws.vec_users.resize(users);
-        auto pyramid = [](SparsePyramid<Vec4>& p) -> SparsePyramid<Vec4>& { return p; };
         for (std::uint32_t u = 0; u < users; ++u) ws.vec_users[u].reserve(hierarchy_, level_count);
         ws.vec_merged.reserve(hierarchy_, level_count);
         for (std::uint32_t u = 0; u < users; ++u) {
-          auto& level0 = pyramid(ws.vec_users[u]).levels[0];
+          auto& level0 = ws.vec_users[u].levels[0];
           const AttributeDiff& pd = diffs[order[u]].positions;
           for (std::uint32_t i = 0; i < pd.indices.size(); ++i) {
             const std::uint32_t v = pd.indices[i];
@@ -677,11 +669,11 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
         timings_.isometry_ms += ms_since(t0);
         t0 = Clock::now();
         ws.pool.run(users, [&](std::size_t u) {
-          decompose<Ops>(links, level_count, pyramid(ws.vec_users[u]), epoch);
+          decompose<Ops>(links, level_count, ws.vec_users[u], epoch);
         });
         timings_.decompose_ms += ms_since(t0);
         t0 = Clock::now();
-        auto& out = pyramid(ws.vec_merged);
+        auto& out = ws.vec_merged;
         mark_sorted_union(
             out.levels[0],
             users, [&](std::size_t u) -> const auto& { return diffs[order[u]].positions.indices; },
@@ -722,15 +714,14 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
       using Ops = decltype(ops);
       using Value = typename Ops::Value;
       if (ws.vec_users.size() < users) ws.vec_users.resize(users);
-      auto pyramid = [](SparsePyramid<Vec4>& p) -> SparsePyramid<Vec4>& { return p; };
       for (std::uint32_t u = 0; u < users; ++u) ws.vec_users[u].reserve(hierarchy_, channel_levels);
       ws.vec_merged.reserve(hierarchy_, channel_levels);
-      auto& out = pyramid(ws.vec_merged);
+      auto& out = ws.vec_merged;
       static const std::vector<std::uint32_t> kNone;
       std::array<const std::vector<std::uint32_t>*, kMaxDiffs> changed_lists{};
       std::array<const float*, kMaxDiffs> changed_values{};
       for (std::uint32_t u = 0; u < users; ++u) {
-        auto& level0 = pyramid(ws.vec_users[u]).levels[0];
+        auto& level0 = ws.vec_users[u].levels[0];
         changed_lists[u] = &kNone;
         for (const ChannelDiff& cd : diffs[order[u]].channels) {
           if (cd.desc.name != channel.desc.name) continue;
@@ -755,7 +746,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
           out.levels[0], users, [&](std::size_t u) -> const auto& { return *changed_lists[u]; },
           epoch, ws.sole);
       ws.pool.run(users, [&](std::size_t u) {
-        decompose<Ops>(links, channel_levels, pyramid(ws.vec_users[u]), epoch);
+        decompose<Ops>(links, channel_levels, ws.vec_users[u], epoch);
       });
       blend_and_reconstruct<Ops>(links, channel_levels, std::span(ws.vec_users.data(), users), out,
                                  epoch, channel_blend, ws.pool);

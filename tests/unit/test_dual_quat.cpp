@@ -306,10 +306,10 @@ TEST(DualQuatGlm, Magnitude) {
 }
 
 DualQuat blend(float m0, const DualQuat& q0, float m1, const DualQuat& q1) {
-  DualQuatSum sum;
-  sum.add(m0, canonical(q0));
-  sum.add(m1, canonical(q1));
-  return normalized(sum.v);
+  DualQuat sum{{0, 0, 0, 0}, {0, 0, 0, 0}};
+  add_scaled(sum, m0, canonical(q0));
+  add_scaled(sum, m1, canonical(q1));
+  return normalized(sum);
 }
 
 TEST(DualQuatBlend, IdentityAndIdempotence) {
@@ -359,11 +359,15 @@ TEST(DualQuatBlend, OffsetSumMatchesAdd) {
   for (int i = 0; i < 200; ++i) {
     const DualQuat q = canonical(rng.motion());
     const float w = static_cast<float>(rng.range(0, 2));
-    DualQuatSum a, b;
-    a.add(w, q);
-    b.add_offset(w, q);
-    b.v[0] += w;  // add_offset(w, q) = add(w, q) - w * identity
-    for (int k = 0; k < 8; ++k) EXPECT_NEAR(a.v[k], b.v[k], 1e-6) << k;
+    DualQuat a{{0, 0, 0, 0}, {0, 0, 0, 0}}, b = a;
+    add_scaled(a, w, q);
+    add_scaled_offset(b, w, q);
+    b.real.w += w;  // add_scaled_offset(w, q) = add_scaled(w, q) - w * identity
+    const float av[8] = {a.real.w, a.real.x, a.real.y, a.real.z,
+                         a.dual.w, a.dual.x, a.dual.y, a.dual.z};
+    const float bv[8] = {b.real.w, b.real.x, b.real.y, b.real.z,
+                         b.dual.w, b.dual.x, b.dual.y, b.dual.z};
+    for (int k = 0; k < 8; ++k) EXPECT_NEAR(av[k], bv[k], 1e-6) << k;
   }
 }
 

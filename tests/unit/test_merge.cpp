@@ -25,6 +25,7 @@
 #include "csculpt/merge.h"
 #include "csculpt/mesh.h"
 #include "csculpt/scenarios.h"
+#include "csculpt/vec3.h"
 #include "test_meshes.h"
 #include "test_support.h"
 
@@ -62,27 +63,8 @@ std::string method_name(MergeMethod m) {
   return std::string(to_string(m));
 }
 
-// ---- small vector helpers (double precision for measurements) ----------------------------
+// ---- measurements (double precision) ----------------------------------------------------
 
-Vec3f vadd(Vec3f a, Vec3f b) {
-  return {a.x + b.x, a.y + b.y, a.z + b.z};
-}
-Vec3f vsub(Vec3f a, Vec3f b) {
-  return {a.x - b.x, a.y - b.y, a.z - b.z};
-}
-Vec3f vmul(Vec3f a, float s) {
-  return {a.x * s, a.y * s, a.z * s};
-}
-float vdot(Vec3f a, Vec3f b) {
-  return a.x * b.x + a.y * b.y + a.z * b.z;
-}
-Vec3f vcross(Vec3f a, Vec3f b) {
-  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-Vec3f vunit(Vec3f a) {
-  const float n = std::sqrt(vdot(a, a));
-  return n > 0 ? vmul(a, 1.f / n) : a;
-}
 double dist(Vec3f a, Vec3f b) {
   const double dx = double(a.x) - b.x, dy = double(a.y) - b.y, dz = double(a.z) - b.z;
   return std::sqrt(dx * dx + dy * dy + dz * dz);
@@ -107,7 +89,7 @@ struct Box {
     const double dz = std::max({0.0, double(lo.z) - p.z, double(p.z) - hi.z});
     return std::sqrt(dx * dx + dy * dy + dz * dz);
   }
-  Vec3f centre() const { return vmul(vadd(lo, hi), 0.5f); }
+  Vec3f centre() const { return csculpt::scale(csculpt::add(lo, hi), 0.5f); }
 };
 Box bbox(const std::vector<Vec3f>& ps) {
   Box b;
@@ -136,7 +118,7 @@ std::unique_ptr<Subject> make_subject(std::string name, Mesh mesh) {
     const Box b = bbox(mesh.positions);
     const Vec3f c = b.centre();
     const float half = 0.5f * bbox_diagonal(mesh.positions);
-    for (Vec3f& p : unit_mesh.positions) p = vmul(vsub(p, c), 1.f / half);
+    for (Vec3f& p : unit_mesh.positions) p = scale(sub(p, c), 1.f / half);
     test::add_material_channels(unit_mesh);
     mesh.channels = std::move(unit_mesh.channels);
   }
@@ -145,7 +127,7 @@ std::unique_ptr<Subject> make_subject(std::string name, Mesh mesh) {
   s->diag = bbox_diagonal(s->base.positions);
   const Box b = bbox(s->base.positions);
   s->centre = b.centre();
-  const Vec3f ext = vsub(b.hi, b.lo);
+  const Vec3f ext = sub(b.hi, b.lo);
   s->axis = ext.x >= ext.y && ext.x >= ext.z ? Vec3f{1, 0, 0}
             : ext.y >= ext.z                 ? Vec3f{0, 1, 0}
                                              : Vec3f{0, 0, 1};
@@ -216,7 +198,7 @@ Vec3f extreme(const Subject& s, Vec3f dir) {
   std::size_t best = 0;
   float best_d = -std::numeric_limits<float>::infinity();
   for (std::size_t v = 0; v < s.base.vertex_count(); ++v) {
-    const float d = vdot(vsub(s.base.positions[v], s.centre), dir);
+    const float d = dot(sub(s.base.positions[v], s.centre), dir);
     if (d > best_d) {
       best_d = d;
       best = v;
@@ -227,12 +209,12 @@ Vec3f extreme(const Subject& s, Vec3f dir) {
 
 Vec3f perpendicular(Vec3f dir) {
   const Vec3f helper = std::abs(dir.x) < 0.9f ? Vec3f{1, 0, 0} : Vec3f{0, 1, 0};
-  return vunit(vcross(dir, helper));
+  return unit(cross(dir, helper));
 }
 
 /// A stroke of `kind` on the surface point furthest along `dir`, sized to the mesh.
 Stroke stroke_at(Kind kind, const Subject& s, Vec3f dir, float size = 1.f) {
-  dir = vunit(dir);
+  dir = unit(dir);
   const auto d = static_cast<float>(s.diag);
   Stroke st;
   st.kind = kind;
@@ -241,7 +223,7 @@ Stroke stroke_at(Kind kind, const Subject& s, Vec3f dir, float size = 1.f) {
     case Kind::grab:
       st.radius = 0.25f * d * size;
       st.strength = 0.25f;
-      st.axis = vunit(vadd(dir, perpendicular(dir)));
+      st.axis = unit(add(dir, perpendicular(dir)));
       break;
     case Kind::inflate:
       st.radius = 0.2f * d * size;
@@ -407,7 +389,7 @@ TEST(MergeSingleEdit, OneDiffReproducesTheEditForEveryMethodAndStroke) {
 TEST(MergeIdentity, DisjointEditsEachKeepTheirRegion) {
   for (const Subject* s : all_subjects()) {
     const Mesh a = edited(*s, {stroke_at(Kind::grab, *s, s->axis, 0.8f)});
-    const Mesh b = edited(*s, {stroke_at(Kind::detail, *s, vmul(s->axis, -1.f))});
+    const Mesh b = edited(*s, {stroke_at(Kind::detail, *s, scale(s->axis, -1.f))});
     const std::vector<std::uint32_t> sa = support(s->base, a), sb = support(s->base, b);
     std::vector<std::uint32_t> both;
     std::set_intersection(sa.begin(), sa.end(), sb.begin(), sb.end(), std::back_inserter(both));
@@ -468,8 +450,8 @@ TEST(MergeIdempotence, IdenticalEditsMergeToThatEdit) {
 TEST(MergeOrder, EveryPermutationGivesTheSameBits) {
   for (const Subject* s : sphere_and_one_real()) {
     const Vec3f dir{0.5f, 0.7f, 0.5f};
-    const Vec3f near1 = vadd(dir, vmul(perpendicular(dir), 0.15f));
-    const Vec3f near2 = vsub(dir, vmul(perpendicular(dir), 0.1f));
+    const Vec3f near1 = add(dir, scale(perpendicular(dir), 0.15f));
+    const Vec3f near2 = sub(dir, scale(perpendicular(dir), 0.1f));
     const std::vector<Mesh> three = {edited(*s, {stroke_at(Kind::bend, *s, dir)}),
                                      edited(*s, {stroke_at(Kind::inflate, *s, near1)}),
                                      edited(*s, {stroke_at(Kind::smooth, *s, near2)})};
@@ -537,7 +519,7 @@ TEST(MergeContinuity, ScalingOneEditByOnePlusEpsMovesTheResultByOrderEps) {
     const Mesh coarse =
         edited(*s, {stroke_at(Kind::twist, *s, dir, 1.5f), stroke_at(Kind::grab, *s, dir)});
     const Mesh fine =
-        edited(*s, {stroke_at(Kind::detail, *s, vadd(dir, vmul(perpendicular(dir), 0.1f)))});
+        edited(*s, {stroke_at(Kind::detail, *s, add(dir, scale(perpendicular(dir), 0.1f)))});
     Merger merger(s->hierarchy);
     for (int which = 0; which < 2; ++which) {
       const Mesh& scaled_one = which == 0 ? fine : coarse;
@@ -578,7 +560,7 @@ TEST(MergeContinuity, ATinyEditWhereOnlyAnotherActedMovesTheResultLittle) {
     const Mesh coarse =
         edited(*s, {stroke_at(Kind::twist, *s, dir, 1.5f), stroke_at(Kind::grab, *s, dir)});
     const Mesh fine =
-        edited(*s, {stroke_at(Kind::detail, *s, vadd(dir, vmul(perpendicular(dir), 0.1f)))});
+        edited(*s, {stroke_at(Kind::detail, *s, add(dir, scale(perpendicular(dir), 0.1f)))});
     const std::vector<std::uint32_t> sc = support(s->base, coarse), sf = support(s->base, fine);
     Merger merger(s->hierarchy);
     for (MergeMethod m : all_merge_methods()) {
@@ -662,7 +644,7 @@ TEST(MergeRotation, GlobalRotationCarriesAFineDetail) {
     rotation.center = s->centre;
     rotation.radius = 1000.f * static_cast<float>(s->diag);
     rotation.strength = 0.5f;
-    rotation.axis = vunit({0.3f, 1.f, 0.2f});
+    rotation.axis = unit({0.3f, 1.f, 0.2f});
     const Stroke detail = stroke_at(Kind::detail, *s, {0.8f, 0.2f, 0.55f});
     const Mesh a = edited(*s, {rotation});
     const Mesh b = edited(*s, {detail});
@@ -769,7 +751,7 @@ TEST(MergeMaterials, DisjointPaintsExactIdenticalIdempotentOverlapsInRange) {
     Merger merger(s->hierarchy);
     const Mesh red = edited(*s, {paint_at(*s, s->axis, {0.9f, 0.1f, 0.1f}, 0.2f, 1.f)});
     const Mesh blue =
-        edited(*s, {paint_at(*s, vmul(s->axis, -1.f), {0.1f, 0.2f, 0.9f}, 0.8f, 0.f)});
+        edited(*s, {paint_at(*s, scale(s->axis, -1.f), {0.1f, 0.2f, 0.9f}, 0.8f, 0.f)});
     const std::vector<std::uint32_t> sr = channel_support(s->base, red),
                                      sbl = channel_support(s->base, blue);
     ASSERT_FALSE(sr.empty());

@@ -98,32 +98,16 @@ inline DualQuat canonical(const DualQuat& q) {
   return q;
 }
 
-/// Accumulator for weighted sums of dual quaternions: a plain 8-float vector sum.
-struct DualQuatSum {
-  float v[8] = {0, 0, 0, 0, 0, 0, 0, 0};
-
-  void add(float weight, const DualQuat& q) {
-    v[0] += weight * q.real.w;
-    v[1] += weight * q.real.x;
-    v[2] += weight * q.real.y;
-    v[3] += weight * q.real.z;
-    v[4] += weight * q.dual.w;
-    v[5] += weight * q.dual.x;
-    v[6] += weight * q.dual.y;
-    v[7] += weight * q.dual.z;
-  }
-  /// Adds weight * (q - 1): the sum over a set where all absent members are the identity.
-  void add_offset(float weight, const DualQuat& q) {
-    v[0] += weight * (q.real.w - 1.f);
-    v[1] += weight * q.real.x;
-    v[2] += weight * q.real.y;
-    v[3] += weight * q.real.z;
-    v[4] += weight * q.dual.w;
-    v[5] += weight * q.dual.x;
-    v[6] += weight * q.dual.y;
-    v[7] += weight * q.dual.z;
-  }
-};
+/// acc += w q, over the 8 components: the weighted sums the blends are made of.
+inline void add_scaled(DualQuat& acc, float w, const DualQuat& q) {
+  acc.real = acc.real + w * q.real;
+  acc.dual = acc.dual + w * q.dual;
+}
+/// acc += w (q - 1): the sum over a set whose absent members are the identity.
+inline void add_scaled_offset(DualQuat& acc, float w, const DualQuat& q) {
+  acc.real = acc.real + w * Quat{q.real.w - 1.f, q.real.x, q.real.y, q.real.z};
+  acc.dual = acc.dual + w * q.dual;
+}
 
 /// Projects an 8-vector onto the unit dual quaternions: real part to unit length, dual part
 /// made orthogonal to it. A (near) zero real part gives the identity.
