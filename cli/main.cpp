@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "bench_merge.h"
+#include "bench_wire.h"
 #include "csculpt/diff.h"
 #include "csculpt/error.h"
 #include "csculpt/hierarchy.h"
@@ -215,6 +216,24 @@ int main(int argc, char** argv) {
   bench_merge->add_flag("--paint", bo.paint, "add material channels and paint strokes");
   bench_merge->add_option("--seed", bo.seed, "stroke seed")->capture_default_str();
 
+  csculpt::cli::BenchWireOptions bw;
+  auto* bench_wire = bench->add_subcommand(
+      "wire", "size and encode/decode time of one stroke's diff message, per stroke kind");
+  bench_wire->add_option("--faces", bw.faces, "approximate face count")
+      ->capture_default_str()
+      ->check(CLI::Range(20u, 50000000u));
+  bench_wire->add_option("--touched", bw.touched, "vertices the stroke touches (about)")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 50000000u));
+  bench_wire
+      ->add_option("--tolerance", bw.tolerance,
+                   "position tolerance, fraction of the bounding-box diagonal")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  bench_wire->add_option("--repeat", bw.repeat, "timed repetitions (median reported)")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 10000u));
+
   CLI11_PARSE(app, argc, argv);
   try {
     if (*merge) return run_merge(base, edits, out, method, k);
@@ -223,6 +242,7 @@ int main(int argc, char** argv) {
     if (*demo) return csculpt::cli::run_demo(demo_options);
     if (*scenarios) return run_scenarios(scenario_faces, scenario_json);
     if (*bench_merge) return csculpt::cli::bench_merge(bo);
+    if (*bench_wire) return csculpt::cli::bench_wire(bw);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "csculpt: error: %s\n", e.what());
     return 1;

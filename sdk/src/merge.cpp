@@ -421,9 +421,9 @@ MethodTraits traits(MergeMethod m) {
 
 /// Canonical order of diffs by content, so the floating-point sums do not depend on the
 /// order the diffs arrived in.
-std::vector<std::size_t> canonical_order(std::span<const Diff> diffs) {
+std::vector<std::size_t> canonical_order(std::span<const Diff* const> diffs) {
   std::vector<std::uint64_t> keys(diffs.size());
-  for (std::size_t i = 0; i < diffs.size(); ++i) keys[i] = digest(diffs[i]);
+  for (std::size_t i = 0; i < diffs.size(); ++i) keys[i] = digest(*diffs[i]);
   std::vector<std::size_t> order(diffs.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
   auto bytes_less = [](const auto& a, const auto& b) {
@@ -432,8 +432,8 @@ std::vector<std::size_t> canonical_order(std::span<const Diff> diffs) {
   };
   std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
     if (keys[a] != keys[b]) return keys[a] < keys[b];
-    const Diff& x = diffs[a];
-    const Diff& y = diffs[b];
+    const Diff& x = *diffs[a];
+    const Diff& y = *diffs[b];
     if (x.positions.indices != y.positions.indices)
       return bytes_less(x.positions.indices, y.positions.indices);
     if (x.positions.values != y.positions.values)
@@ -512,6 +512,16 @@ void with_translation_ops(TranslationBlend blend, Fn&& fn) {
 
 Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod method,
                    const MergeFrame& frame) {
+  if (diffs.size() > kMaxDiffs)
+    throw InvalidInput("merge: " + std::to_string(diffs.size()) + " diffs given, at most " +
+                       std::to_string(kMaxDiffs) + " are merged at once");
+  std::array<const Diff*, kMaxDiffs> pointers{};
+  for (std::size_t i = 0; i < diffs.size(); ++i) pointers[i] = &diffs[i];
+  return merge(base, std::span<const Diff* const>(pointers.data(), diffs.size()), method, frame);
+}
+
+Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMethod method,
+                   const MergeFrame& frame) {
   const MethodTraits t = traits(method);
   Workspace& ws = *workspace_;
   timings_ = {};
@@ -527,7 +537,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
     };
     for (std::uint32_t u = 0; u < user_count; ++u) add(user_pyramids[u]);
     add(merged_pyramid);
-    for (const Diff& d : diffs) timings_.bytes_touched += d.positions.indices.size() * 16;
+    for (const Diff* d : diffs) timings_.bytes_touched += d->positions.indices.size() * 16;
   };
   if (base.vertex_count() != hierarchy_.topology().vertex_count)
     throw InvalidInput("merge: the mesh has " + std::to_string(base.vertex_count()) +
@@ -551,7 +561,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
     throw InvalidInput("merge: " + std::to_string(diffs.size()) + " diffs given, at most " +
                        std::to_string(kMaxDiffs) + " are merged at once");
   for (std::size_t i = 0; i < diffs.size(); ++i)
-    validate(diffs[i], base, "diff " + std::to_string(i));
+    validate(*diffs[i], base, "diff " + std::to_string(i));
   if (!(frame.scale > 0) || !std::isfinite(frame.scale))
     throw InvalidInput("merge: the frame scale must be positive and finite");
 
@@ -587,7 +597,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
         lk.slot.resize(vertex_count);
         lk.stamp.resize(vertex_count, 0);
       }
-      const AttributeDiff& pd = diffs[order[u]].positions;
+      const AttributeDiff& pd = diffs[order[u]]->positions;
       for (std::uint32_t i = 0; i < pd.indices.size(); ++i) {
         lk.slot[pd.indices[i]] = i;
         lk.stamp[pd.indices[i]] = epoch;
@@ -595,7 +605,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
     }
     auto edited_of = [&](std::uint32_t u) {
       const auto& lk = ws.lookups[u];
-      const AttributeDiff& pd = diffs[order[u]].positions;
+      const AttributeDiff& pd = diffs[order[u]]->positions;
       return [&lk, &pd, &base, epoch](std::uint32_t v) -> Vec3f {
         if (lk.stamp[v] != epoch) return base.positions[v];
         const float* p = pd.values.data() + 3 * std::size_t{lk.slot[v]};
@@ -612,7 +622,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
         lk.isometry.resize(vertex_count, base.face_count());
         auto& level0 = ws.dq_users[u].levels[0];
         detail::compute_vertex_isometries(
-            hierarchy_.topology(), base.positions, diffs[order[u]].positions.indices,
+            hierarchy_.topology(), base.positions, diffs[order[u]]->positions.indices,
             edited_of(static_cast<std::uint32_t>(u)), lk.isometry,
             [&level0, epoch](std::uint32_t v, const DualQuat& q) {
               level0.slots[v] = {q, epoch};
@@ -629,7 +639,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
       t0 = Clock::now();
       mark_sorted_union(
           ws.dq_merged.levels[0],
-          users, [&](std::size_t u) -> const auto& { return diffs[order[u]].positions.indices; },
+          users, [&](std::size_t u) -> const auto& { return diffs[order[u]]->positions.indices; },
           epoch, ws.sole);
       blend_and_reconstruct<DqOps>(links, level_count, std::span(ws.dq_users.data(), users),
                                    ws.dq_merged, epoch, t.node_blend, ws.pool);
@@ -656,7 +666,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
         ws.vec_merged.reserve(hierarchy_, level_count);
         for (std::uint32_t u = 0; u < users; ++u) {
           auto& level0 = ws.vec_users[u].levels[0];
-          const AttributeDiff& pd = diffs[order[u]].positions;
+          const AttributeDiff& pd = diffs[order[u]]->positions;
           for (std::uint32_t i = 0; i < pd.indices.size(); ++i) {
             const std::uint32_t v = pd.indices[i];
             const float* e = pd.values.data() + 3 * std::size_t{i};
@@ -676,7 +686,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
         auto& out = ws.vec_merged;
         mark_sorted_union(
             out.levels[0],
-            users, [&](std::size_t u) -> const auto& { return diffs[order[u]].positions.indices; },
+            users, [&](std::size_t u) -> const auto& { return diffs[order[u]]->positions.indices; },
             epoch, ws.sole);
         blend_and_reconstruct<Ops>(links, level_count, std::span(ws.vec_users.data(), users), out,
                                    epoch, t.node_blend, ws.pool);
@@ -723,7 +733,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
       for (std::uint32_t u = 0; u < users; ++u) {
         auto& level0 = ws.vec_users[u].levels[0];
         changed_lists[u] = &kNone;
-        for (const ChannelDiff& cd : diffs[order[u]].channels) {
+        for (const ChannelDiff& cd : diffs[order[u]]->channels) {
           if (cd.desc.name != channel.desc.name) continue;
           changed_lists[u] = &cd.change.indices;
           changed_values[u] = cd.change.values.data();

@@ -78,6 +78,9 @@ class Merger {
   /// The work runs on a pool of the machine's hardware threads owned by this Merger.
   Diff merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod method,
              const MergeFrame& frame);
+  /// The same, for diffs held elsewhere (no copy): each pointer must be non-null.
+  Diff merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMethod method,
+             const MergeFrame& frame);
   Diff merge(const Mesh& base, std::span<const Diff> diffs,
              MergeMethod method = MergeMethod::full) {
     return merge(base, diffs, method, MergeFrame::fit(base.positions));

@@ -1,0 +1,428 @@
+/*
+ * csculpt.h — the stable C ABI of the cSculpt SDK.
+ *
+ * cSculpt merges concurrent sculpting and painting edits of one mesh (paper: "cSculpt: A
+ * System for Collaborative Sculpting", §3). This header is the whole public contract: what is
+ * not declared here is not API. It is valid C99 and C++.
+ *
+ * Conventions (every function follows them unless its comment says otherwise):
+ *
+ * - Results. Functions that can fail return a csc_status; CSC_OK (0) is success. On failure
+ *   nothing is written to out-parameters, no handle passed in is changed, and
+ *   csc_last_error() describes the problem in words a person can read.
+ * - Out-parameter first. A function that creates something takes `T** out` as its first
+ *   argument; on success *out owns a new handle that the caller releases with the matching
+ *   csc_*_destroy(). Every destroy function accepts NULL.
+ * - Memory. Memory the library allocates is released by the library (destroy functions);
+ *   the host never frees it with its own allocator. Pointers the library returns into a handle
+ *   ("borrowed") stay valid until that handle is destroyed or changed by a call documented to
+ *   change it.
+ * - Threads. Any function may be called from any thread. Handles are not locked: a handle
+ *   that a call changes (a csc_mesh being applied to, a csc_merger merging) must not be used
+ *   by another thread during that call. Calls that only read a handle (marked "reads") may run
+ *   concurrently on it. csc_hierarchy is immutable once built and may be shared freely.
+ * - Errors. Bad arguments (NULL where a pointer is needed, a wrong struct_size, a handle of
+ *   another kind or already destroyed, where detectable) give CSC_ERROR_INVALID_ARGUMENT.
+ *   Bad data (a malformed file or message, a diff for another mesh, NaN/Inf) gives
+ *   CSC_ERROR_INVALID_INPUT. No C++ exception, type or STL object crosses this boundary.
+ * - Growth. Option and description structs start with `struct_size` (set it with the
+ *   matching CSC_*_INIT macro or sizeof); fields are only appended, so a host built against
+ *   an older header keeps working. Enums are 32-bit. New behaviour arrives as new functions;
+ *   existing signatures never change (see docs/api-stability.md).
+ */
+#ifndef CSCULPT_H
+#define CSCULPT_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#if defined(_WIN32)
+#if defined(CSC_BUILDING_LIBRARY)
+#define CSC_API __declspec(dllexport)
+#else
+#define CSC_API __declspec(dllimport)
+#endif
+#elif defined(__GNUC__)
+#define CSC_API __attribute__((visibility("default")))
+#else
+#define CSC_API
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- Version ------------------------------------------------------------------------------ */
+
+#define CSC_VERSION_MAJOR 0
+#define CSC_VERSION_MINOR 2
+#define CSC_VERSION_PATCH 0
+/** MAJOR * 10000 + MINOR * 100 + PATCH, as csc_version() returns it. */
+#define CSC_VERSION_NUMBER (CSC_VERSION_MAJOR * 10000 + CSC_VERSION_MINOR * 100 + CSC_VERSION_PATCH)
+#define CSC_VERSION_STRING "0.2.0"
+
+/** The version of the library actually loaded (compare with CSC_VERSION_NUMBER: a host built
+ *  against MAJOR.MINOR runs with any library of the same MAJOR and a MINOR at least as high).
+ *  Never fails; thread-safe. */
+CSC_API uint32_t csc_version(void);
+/** "MAJOR.MINOR.PATCH" of the loaded library; static storage. */
+CSC_API const char* csc_version_string(void);
+/** The wire protocol version the library writes (diff messages); it reads 1 to this. */
+CSC_API uint32_t csc_wire_protocol_version(void);
+
+/* ---- Status and errors -------------------------------------------------------------------- */
+
+typedef enum csc_status {
+  CSC_OK = 0,
+  /** A NULL or out-of-range argument, a wrong struct_size, a foreign or destroyed handle. */
+  CSC_ERROR_INVALID_ARGUMENT = 1,
+  /** Data that cannot be used: malformed file or message, mismatched mesh, NaN/Inf. */
+  CSC_ERROR_INVALID_INPUT = 2,
+  /** A file could not be opened, read or written. */
+  CSC_ERROR_IO = 3,
+  /** A diff message names a base version other than the one given to decode it against. */
+  CSC_ERROR_UNKNOWN_BASE_VERSION = 4,
+  /** Memory could not be allocated. */
+  CSC_ERROR_OUT_OF_MEMORY = 5,
+  /** A bug in the library (please report it with csc_last_error()). */
+  CSC_ERROR_INTERNAL = 6,
+  CSC_STATUS_MAX_ENUM = 0x7FFFFFFF
+} csc_status;
+
+/** A short constant description of a status ("invalid argument"); static storage; never NULL
+ *  (unknown values give "unknown status"). */
+CSC_API const char* csc_status_str(csc_status status);
+
+/** The message of the most recent failed call on this thread ("" if none has failed). Owned
+ *  by the library, valid until the next failing call on the same thread. Thread-local. */
+CSC_API const char* csc_last_error(void);
+
+/* ---- Handles ------------------------------------------------------------------------------ */
+
+/** A triangle mesh: positions, triangles and named per-vertex float channels. */
+typedef struct csc_mesh csc_mesh;
+/** The multiresolution vertex hierarchy of a mesh's connectivity (paper §3.1). Immutable. */
+typedef struct csc_hierarchy csc_hierarchy;
+/** A sparse edit of a mesh: the changed vertices of positions and of each channel. */
+typedef struct csc_diff csc_diff;
+/** Merges diffs on one hierarchy; reuses its workspace between merges. */
+typedef struct csc_merger csc_merger;
+/** Bytes the library made (an encoded diff message). */
+typedef struct csc_bytes csc_bytes;
+
+/* ---- Channels ----------------------------------------------------------------------------- */
+
+/** How a channel's stored values map to the linear space its edits merge in. */
+typedef enum csc_linearisation {
+  CSC_LINEARISATION_IDENTITY = 0, /**< already linear (metallic, masks) */
+  CSC_LINEARISATION_SQUARE = 1,   /**< linear = v^2 (roughness -> alpha) */
+  CSC_LINEARISATION_SRGB = 2,     /**< sRGB-encoded colour in [0,1] */
+  CSC_LINEARISATION_MAX_ENUM = 0x7FFFFFFF
+} csc_linearisation;
+
+/** A per-vertex channel: `width` floats per vertex (1 to 4), vertex-major. */
+typedef struct csc_channel_desc {
+  const char* name; /**< unique within the mesh, 1 to 255 bytes, no NUL */
+  uint32_t width;
+  csc_linearisation linearisation;
+  /** Valid range of stored values (min_value <= max_value); merged values are clamped into
+   *  it. -INFINITY and INFINITY (from <math.h>) leave a channel unbounded. */
+  float min_value;
+  float max_value;
+} csc_channel_desc;
+
+/* ---- Meshes ------------------------------------------------------------------------------- */
+
+/** A mesh described by the host's own arrays. The library copies them (a csc_mesh is the
+ *  agreed base a session merges against, kept once per version); per-edit calls
+ *  (csc_diff_capture_arrays, csc_diff_apply_arrays) work on the host's arrays in place. */
+typedef struct csc_mesh_desc {
+  uint32_t struct_size;
+  uint32_t vertex_count;
+  const float* positions; /**< 3 * vertex_count: x, y, z per vertex */
+  uint32_t triangle_count;
+  const uint32_t* triangles; /**< 3 * triangle_count vertex indices, counter-clockwise */
+  uint32_t channel_count;
+  const csc_channel_desc* channels; /**< channel_count descriptions (may be NULL if 0) */
+  /** channel_count arrays of vertex_count * width floats; NULL entries are filled with 0. */
+  const float* const* channel_values;
+} csc_mesh_desc;
+#define CSC_MESH_DESC_INIT \
+  { sizeof(csc_mesh_desc), 0, NULL, 0, NULL, 0, NULL, NULL }
+
+/** Builds a mesh from host arrays (copied). Fails with CSC_ERROR_INVALID_INPUT for no
+ *  vertices or triangles, an index out of range or repeated within a triangle, NaN/Inf, a
+ *  channel of width outside 1..4, a duplicate or empty channel name, min_value > max_value. */
+CSC_API csc_status csc_mesh_create(csc_mesh** out, const csc_mesh_desc* desc);
+
+/** Adds the built-in material channels (albedo RGB sRGB [0,1], metallic [0,1], roughness
+ *  squared [0,1]) that the mesh lacks, filled with a grey rough dielectric. Changes `mesh`. */
+CSC_API csc_status csc_mesh_add_material_channels(csc_mesh* mesh);
+
+/** Reads a .ply, .obj, .off or .stl file (PLY vertex properties become channels). Fails with
+ *  CSC_ERROR_IO if it cannot be read, CSC_ERROR_INVALID_INPUT (naming the file, the place
+ *  and the problem) if it is malformed. */
+CSC_API csc_status csc_mesh_read(csc_mesh** out, const char* path);
+
+/** Writes .ply (binary, channels as vertex properties; reads back bit-identical) or .obj
+ *  (positions and faces). Writes a temporary file and renames it: a failure leaves no partial
+ *  file. Reads `mesh`. */
+CSC_API csc_status csc_mesh_write(const csc_mesh* mesh, const char* path);
+
+/** A deep copy. Reads `mesh`. */
+CSC_API csc_status csc_mesh_clone(csc_mesh** out, const csc_mesh* mesh);
+
+CSC_API void csc_mesh_destroy(csc_mesh* mesh);
+
+/** Counts; 0 for NULL or a foreign handle. Read. */
+CSC_API uint32_t csc_mesh_vertex_count(const csc_mesh* mesh);
+CSC_API uint32_t csc_mesh_triangle_count(const csc_mesh* mesh);
+CSC_API uint32_t csc_mesh_channel_count(const csc_mesh* mesh);
+
+/** Borrowed read-only views of the mesh's arrays (3 floats per vertex; 3 indices per
+ *  triangle); NULL for NULL or a foreign handle. Valid until the mesh is destroyed or changed
+ *  (csc_mesh_apply_diff, csc_mesh_add_material_channels). */
+CSC_API const float* csc_mesh_positions(const csc_mesh* mesh);
+CSC_API const uint32_t* csc_mesh_triangles(const csc_mesh* mesh);
+
+/** A channel as the mesh holds it; `desc.name` and `values` are borrowed like the arrays. */
+typedef struct csc_channel_view {
+  uint32_t struct_size;
+  csc_channel_desc desc;
+  const float* values; /**< vertex_count * desc.width */
+} csc_channel_view;
+#define CSC_CHANNEL_VIEW_INIT \
+  { sizeof(csc_channel_view), {NULL, 0, CSC_LINEARISATION_IDENTITY, 0.f, 0.f}, NULL }
+
+/** Channel `index` (0 .. channel_count-1). Reads `mesh`. */
+CSC_API csc_status csc_mesh_channel(const csc_mesh* mesh, uint32_t index, csc_channel_view* out);
+
+/** The index of the channel called `name`, or -1 (also for NULL arguments). Reads `mesh`. */
+CSC_API int32_t csc_mesh_find_channel(const csc_mesh* mesh, const char* name);
+
+/** Axis-aligned bounding-box diagonal of the positions. Reads `mesh`. */
+CSC_API float csc_mesh_bbox_diagonal(const csc_mesh* mesh);
+
+/* ---- Hierarchy ---------------------------------------------------------------------------- */
+
+typedef struct csc_hierarchy_options {
+  uint32_t struct_size;
+  /** K, the blended parents per node (paper: 7; 1 gives a tree). 1 to 32. */
+  uint32_t max_parents;
+} csc_hierarchy_options;
+#define CSC_HIERARCHY_OPTIONS_INIT \
+  { sizeof(csc_hierarchy_options), 7 }
+
+/** Builds the hierarchy of the mesh's connectivity (paper §3.1). A pure function of the
+ *  triangles: every peer builds the same hierarchy bit for bit (compare csc_hierarchy_digest).
+ *  `options` may be NULL for the defaults. Reads `mesh`; the hierarchy does not refer to it
+ *  afterwards. */
+CSC_API csc_status csc_hierarchy_build(csc_hierarchy** out, const csc_mesh* mesh,
+                                       const csc_hierarchy_options* options);
+CSC_API void csc_hierarchy_destroy(csc_hierarchy* hierarchy);
+
+typedef struct csc_hierarchy_stats {
+  uint32_t struct_size;
+  uint32_t vertices;
+  uint32_t faces;
+  uint32_t levels;
+  uint64_t nodes;          /**< over all levels */
+  double node_ratio;       /**< nodes / vertices (paper: about 1.33) */
+  double mean_level_ratio; /**< mean |L(i+1)| / |L(i)| */
+  uint32_t top_nodes;      /**< nodes of the coarsest level: one per connected component */
+} csc_hierarchy_stats;
+#define CSC_HIERARCHY_STATS_INIT \
+  { sizeof(csc_hierarchy_stats), 0, 0, 0, 0, 0.0, 0.0, 0 }
+
+CSC_API csc_status csc_hierarchy_get_stats(const csc_hierarchy* hierarchy,
+                                           csc_hierarchy_stats* out);
+/** A 64-bit digest of every array of the hierarchy (0 for NULL). */
+CSC_API uint64_t csc_hierarchy_digest(const csc_hierarchy* hierarchy);
+
+/* ---- Diffs -------------------------------------------------------------------------------- */
+
+/** The host's current vertex arrays, for capturing a diff from them or applying one into
+ *  them without copying. Same vertex count and channel order as the base mesh. */
+typedef struct csc_vertex_arrays {
+  uint32_t struct_size;
+  uint32_t vertex_count;
+  float* positions; /**< 3 * vertex_count */
+  uint32_t channel_count;
+  /** channel_count arrays, in the base mesh's channel order, of vertex_count * width floats.
+   *  A NULL entry is skipped (capture: unchanged; apply: not written). */
+  float* const* channels;
+} csc_vertex_arrays;
+#define CSC_VERTEX_ARRAYS_INIT \
+  { sizeof(csc_vertex_arrays), 0, NULL, 0, NULL }
+
+/** The diff from `base` to `current`: every vertex whose position or channel value differs
+ *  bitwise. Reads the host arrays in place (nothing is copied but the changes). Fails with
+ *  CSC_ERROR_INVALID_INPUT if the counts differ from the base or a changed value is NaN/Inf.
+ *  Reads `base` and `current`. */
+CSC_API csc_status csc_diff_capture_arrays(csc_diff** out, const csc_mesh* base,
+                                           const csc_vertex_arrays* current);
+
+/** The diff from `base` to `edited` (same vertex count, triangles and channels). */
+CSC_API csc_status csc_diff_capture(csc_diff** out, const csc_mesh* base, const csc_mesh* edited);
+
+CSC_API void csc_diff_destroy(csc_diff* diff);
+
+/** Writes the diff's values into `mesh` (its base, or a mesh of the same layout). Changes
+ *  `mesh`; on failure `mesh` is unchanged. */
+CSC_API csc_status csc_mesh_apply_diff(csc_mesh* mesh, const csc_diff* diff);
+
+/** Writes the diff's values into the host's arrays in place (`target` has the base mesh's
+ *  vertex count and channel order, given through `base`). Only changed vertices are written.
+ *  On failure nothing is written. */
+CSC_API csc_status csc_diff_apply_arrays(const csc_diff* diff, const csc_mesh* base,
+                                         const csc_vertex_arrays* target);
+
+typedef struct csc_diff_info {
+  uint32_t struct_size;
+  uint32_t vertex_count;     /**< of the mesh the diff is for */
+  uint32_t touched_vertices; /**< changed in any attribute */
+  uint32_t position_changes;
+  uint32_t channel_count; /**< channels the diff carries (the base's channels) */
+  uint64_t digest;        /**< content digest (what orders diffs canonically in a merge) */
+} csc_diff_info;
+#define CSC_DIFF_INFO_INIT \
+  { sizeof(csc_diff_info), 0, 0, 0, 0, 0 }
+
+CSC_API csc_status csc_diff_get_info(const csc_diff* diff, csc_diff_info* out);
+
+/** The changed positions: `*count` vertex indices (strictly increasing) and 3 * `*count`
+ *  edited values (x, y, z), borrowed until the diff is destroyed. */
+CSC_API csc_status csc_diff_positions(const csc_diff* diff, const uint32_t** indices,
+                                      const float** values, uint32_t* count);
+
+/** The changes of channel `index` of the diff (the base's channel order): its name (borrowed),
+ *  width, and `*count` indices with `*count * width` edited values. */
+CSC_API csc_status csc_diff_channel(const csc_diff* diff, uint32_t index, const char** name,
+                                    uint32_t* width, const uint32_t** indices, const float** values,
+                                    uint32_t* count);
+
+/* ---- Wire format (FlatBuffers DiffMessage, schema sdk/schema/diff.fbs) --------------------- */
+
+/** What a diff message says about itself. `author` is borrowed from the bytes it was read
+ *  from (csc_diff_peek) or from the diff handle (csc_diff_decode), NUL-terminated. */
+typedef struct csc_message_info {
+  uint32_t struct_size;
+  uint32_t protocol;
+  uint64_t base_version;
+  uint64_t sequence;
+  uint32_t vertex_count;
+  const char* author;
+} csc_message_info;
+#define CSC_MESSAGE_INFO_INIT \
+  { sizeof(csc_message_info), 0, 0, 0, 0, NULL }
+
+typedef struct csc_encode_options {
+  uint32_t struct_size;
+  uint64_t base_version; /**< the agreed version the diff is taken against */
+  uint64_t sequence;     /**< the author's counter */
+  const char* author;    /**< NULL or at most 256 bytes */
+  /** Largest position error, as a fraction of position_scale; 0 = lossless. */
+  double position_tolerance;
+  /** Length the tolerance is relative to; 0 = the base's bounding-box diagonal. */
+  double position_scale;
+  /** Largest channel error in stored units; 0 = lossless. */
+  double channel_tolerance;
+} csc_encode_options;
+#define CSC_ENCODE_OPTIONS_INIT \
+  { sizeof(csc_encode_options), 0, 0, NULL, 1e-5, 0.0, 1e-4 }
+
+/** Encodes `diff` (taken against `base`) as a diff message: indices delta-coded, changes
+ *  quantised within the stated tolerances (each decoded component within 0.8 x tolerance plus
+ *  half a float ulp), or lossless with zero tolerances. A 10,000-vertex stroke is about 40 KB.
+ *  `options` may be NULL (defaults above). Reads `diff` and `base`. The receivers' diff is
+ *  csc_diff_decode of these bytes: a sender that must hold the same state as its peers uses
+ *  that in place of `diff`. */
+CSC_API csc_status csc_diff_encode(csc_bytes** out, const csc_diff* diff, const csc_mesh* base,
+                                   const csc_encode_options* options);
+
+/** Borrowed view of the bytes; valid until csc_bytes_destroy. */
+CSC_API const uint8_t* csc_bytes_data(const csc_bytes* bytes);
+CSC_API size_t csc_bytes_size(const csc_bytes* bytes);
+CSC_API void csc_bytes_destroy(csc_bytes* bytes);
+
+/** Verifies a message (FlatBuffers verifier with limits, identifier, protocol) and reads its
+ *  header without decoding, e.g. to choose the base to decode it against. `info->author`
+ *  points into `data`. Fails with CSC_ERROR_INVALID_INPUT saying what is wrong. */
+CSC_API csc_status csc_diff_peek(const void* data, size_t size, csc_message_info* info);
+
+/** Verifies and decodes a message against `base`, the mesh of version `base_version`. Fails
+ *  with CSC_ERROR_UNKNOWN_BASE_VERSION if the message names another base version, and with
+ *  CSC_ERROR_INVALID_INPUT (saying what is wrong) for corrupt bytes, a newer protocol, another
+ *  vertex count, an unknown channel or width, indices out of range, inconsistent counts or
+ *  non-finite values. `info` may be NULL; its `author` is borrowed from the new diff. */
+CSC_API csc_status csc_diff_decode(csc_diff** out, const csc_mesh* base, uint64_t base_version,
+                                   const void* data, size_t size, csc_message_info* info);
+
+/* ---- Merge -------------------------------------------------------------------------------- */
+
+/** The paper's method and the variants it is compared with (Fig. 3, Fig. 5). */
+typedef enum csc_merge_method {
+  CSC_MERGE_FULL = 0,                   /**< the paper's merge (default) */
+  CSC_MERGE_SINGLE_PARENT = 1,          /**< isometries, multiscale, a tree (K = 1) */
+  CSC_MERGE_SINGLE_LEVEL_ISOMETRY = 2,  /**< isometries blended per vertex, no hierarchy */
+  CSC_MERGE_MULTISCALE_TRANSLATION = 3, /**< translations on the hierarchy */
+  CSC_MERGE_WEIGHTED_TRANSLATION = 4,   /**< translations blended per vertex by magnitude */
+  CSC_MERGE_AVERAGE = 5,                /**< mean of the translations */
+  CSC_MERGE_SUM = 6,                    /**< sum of the translations */
+  CSC_MERGE_PAPER_BLEND = 7,            /**< `full` with the paper's node blend literally */
+  CSC_MERGE_METHOD_MAX_ENUM = 0x7FFFFFFF
+} csc_merge_method;
+
+/** "full", "single-parent", ...; NULL for an unknown value. Static storage. */
+CSC_API const char* csc_merge_method_name(csc_merge_method method);
+/** Parses a name csc_merge_method_name gives. */
+CSC_API csc_status csc_merge_method_from_name(csc_merge_method* out, const char* name);
+
+typedef struct csc_merge_options {
+  uint32_t struct_size;
+  csc_merge_method method;
+  /** The working frame (positions are merged centred on frame_center and divided by
+   *  frame_scale, so the blend's magnitudes do not depend on units or placement). With
+   *  use_frame = 0 it is fitted to the base's bounding box on each call; a session fits it
+   *  once and passes it, so every peer merges in the same frame. */
+  uint32_t use_frame;
+  float frame_center[3];
+  float frame_scale;
+} csc_merge_options;
+#define CSC_MERGE_OPTIONS_INIT \
+  { sizeof(csc_merge_options), CSC_MERGE_FULL, 0, {0.f, 0.f, 0.f}, 1.f }
+
+/** A merger for meshes of `hierarchy`'s connectivity. It keeps a reference to `hierarchy`,
+ *  which must outlive it, and owns a small worker pool. */
+CSC_API csc_status csc_merger_create(csc_merger** out, const csc_hierarchy* hierarchy);
+CSC_API void csc_merger_destroy(csc_merger* merger);
+
+/** Merges `count` diffs (1 to 64), each taken against `base`, into one diff from `base`
+ *  (paper §3.1). The result depends only on `base` and the set of diffs: bit-identical for
+ *  any order of `diffs`, on every run and every peer of the same build. Vertices no diff
+ *  touches keep their exact base values and are not listed. `options` may be NULL (full,
+ *  fitted frame). Changes `merger`'s workspace: one merge at a time per merger. Fails with
+ *  CSC_ERROR_INVALID_INPUT if a diff does not fit `base` or `base` is not the hierarchy's
+ *  mesh. */
+CSC_API csc_status csc_merger_merge(csc_merger* merger, csc_diff** out, const csc_mesh* base,
+                                    const csc_diff* const* diffs, uint32_t count,
+                                    const csc_merge_options* options);
+
+/** Timings of the merger's last merge, in milliseconds. */
+typedef struct csc_merge_timings {
+  uint32_t struct_size;
+  double isometry_ms;
+  double decompose_ms;
+  double blend_ms;
+  double apply_ms;
+} csc_merge_timings;
+#define CSC_MERGE_TIMINGS_INIT \
+  { sizeof(csc_merge_timings), 0.0, 0.0, 0.0, 0.0 }
+
+CSC_API csc_status csc_merger_last_timings(const csc_merger* merger, csc_merge_timings* out);
+
+#ifdef __cplusplus
+} /* extern "C" */
+#endif
+
+#endif /* CSCULPT_H */

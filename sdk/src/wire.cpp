@@ -1,0 +1,362 @@
+// Wire codec (schema sdk/schema/diff.fbs).
+#include "csculpt/wire.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <string>
+
+#include "csculpt/error.h"
+#include "diff_generated.h"
+
+namespace csculpt {
+namespace {
+
+namespace fb = csculpt::wire;
+
+// Quantisation step as a fraction of the tolerance: rounding costs at most step/2 = 0.8 x
+// tolerance, leaving 0.2 x tolerance for the float rounding of the decoded value.
+constexpr double step_per_tolerance = 1.6;
+// Past this many steps a change is not worth quantising (and q * step would lose integers).
+constexpr double max_quantum = 9.0e15;
+
+// ---- varints -------------------------------------------------------------------------------
+
+void put_varint(std::vector<std::uint8_t>& out, std::uint64_t v) {
+  while (v >= 0x80) {
+    out.push_back(static_cast<std::uint8_t>(v | 0x80));
+    v >>= 7;
+  }
+  out.push_back(static_cast<std::uint8_t>(v));
+}
+
+std::uint64_t zigzag(std::int64_t v) {
+  return (static_cast<std::uint64_t>(v) << 1) ^ static_cast<std::uint64_t>(v >> 63);
+}
+std::int64_t unzigzag(std::uint64_t v) {
+  return static_cast<std::int64_t>(v >> 1) ^ -static_cast<std::int64_t>(v & 1);
+}
+
+/// Reads varints from a byte range; every failure names what was being read.
+class VarintReader {
+ public:
+  VarintReader(const std::uint8_t* data, std::size_t size, std::string_view what)
+      : p_(data), end_(data + size), what_(what) {}
+  std::uint64_t next() {
+    std::uint64_t v = 0;
+    for (int shift = 0; shift < 64; shift += 7) {
+      if (p_ == end_) throw InvalidInput(std::string(what_) + ": truncated varint");
+      const std::uint8_t b = *p_++;
+      if (shift == 63 && b > 1) break;
+      v |= std::uint64_t{b & 0x7fu} << shift;
+      if (!(b & 0x80)) return v;
+    }
+    throw InvalidInput(std::string(what_) + ": varint longer than 64 bits");
+  }
+  bool done() const { return p_ == end_; }
+
+ private:
+  const std::uint8_t* p_;
+  const std::uint8_t* end_;
+  std::string_view what_;
+};
+
+// ---- encoding ------------------------------------------------------------------------------
+
+struct EncodedAttribute {
+  std::vector<std::uint8_t> index_gaps;
+  std::vector<std::uint8_t> values;
+  std::uint32_t count = 0;
+  fb::ValueCoding coding = fb::ValueCoding::Float32;
+  double step = 0;
+};
+
+void encode_indices(std::span<const std::uint32_t> indices, std::vector<std::uint8_t>& out) {
+  std::uint64_t next = 0;  // index[-1] + 1
+  for (const std::uint32_t i : indices) {
+    put_varint(out, i - next);
+    next = std::uint64_t{i} + 1;
+  }
+}
+
+/// `base` holds `width` floats per vertex of the base mesh.
+EncodedAttribute encode_attribute(const AttributeDiff& change, const float* base,
+                                  std::uint32_t width, double tolerance) {
+  EncodedAttribute e;
+  const std::size_t n = change.indices.size();
+  const double step = step_per_tolerance * tolerance;
+  bool quantise = tolerance > 0 && std::isfinite(step) && step > 0;
+  std::vector<std::int64_t> q;
+  std::vector<std::uint32_t> kept;
+  if (quantise) {
+    q.reserve(n * width);
+    kept.reserve(n);
+    std::vector<std::int64_t> row(width);
+    for (std::size_t i = 0; i < n && quantise; ++i) {
+      const std::size_t v = change.indices[i];
+      bool nonzero = false;
+      for (std::uint32_t c = 0; c < width; ++c) {
+        const double d =
+            (double(change.values[i * width + c]) - double(base[v * width + c])) / step;
+        if (!(std::abs(d) < max_quantum)) {
+          quantise = false;
+          break;
+        }
+        row[c] = std::llround(d);
+        nonzero |= row[c] != 0;
+      }
+      if (nonzero) {
+        kept.push_back(change.indices[i]);
+        q.insert(q.end(), row.begin(), row.end());
+      }
+    }
+  }
+  if (!quantise) {
+    e.count = static_cast<std::uint32_t>(n);
+    encode_indices(change.indices, e.index_gaps);
+    e.values.resize(change.values.size() * sizeof(float));
+    static_assert(std::endian::native == std::endian::little, "wire floats are little-endian");
+    std::memcpy(e.values.data(), change.values.data(), e.values.size());
+    return e;
+  }
+  e.count = static_cast<std::uint32_t>(kept.size());
+  e.step = step;
+  encode_indices(kept, e.index_gaps);
+  // Planar, plain and predicted; keep the smaller.
+  std::vector<std::uint8_t> plain, predicted;
+  plain.reserve(q.size() * 2);
+  predicted.reserve(q.size() * 2);
+  for (std::uint32_t c = 0; c < width; ++c) {
+    std::int64_t previous = 0;
+    for (std::size_t i = 0; i < kept.size(); ++i) {
+      const std::int64_t value = q[i * width + c];
+      put_varint(plain, zigzag(value));
+      put_varint(predicted, zigzag(value - previous));
+      previous = value;
+    }
+  }
+  if (predicted.size() < plain.size()) {
+    e.coding = fb::ValueCoding::QuantisedDeltaPredicted;
+    e.values = std::move(predicted);
+  } else {
+    e.coding = fb::ValueCoding::QuantisedDelta;
+    e.values = std::move(plain);
+  }
+  return e;
+}
+
+flatbuffers::Offset<fb::AttributeChanges> build_attribute(flatbuffers::FlatBufferBuilder& b,
+                                                          const EncodedAttribute& e) {
+  const auto gaps = b.CreateVector(e.index_gaps);
+  const auto values = b.CreateVector(e.values);
+  return fb::CreateAttributeChanges(b, e.count, gaps, e.coding, e.step, values);
+}
+
+// ---- decoding ------------------------------------------------------------------------------
+
+const fb::DiffMessage* verified_message(std::span<const std::uint8_t> bytes,
+                                        const DecodeLimits& limits) {
+  if (bytes.size() > limits.max_bytes)
+    throw InvalidInput("diff message of " + std::to_string(bytes.size()) +
+                       " bytes exceeds the limit of " + std::to_string(limits.max_bytes));
+  if (bytes.size() < 8)
+    throw InvalidInput("diff message too short (" + std::to_string(bytes.size()) + " bytes)");
+  if (!fb::DiffMessageBufferHasIdentifier(bytes.data()))
+    throw InvalidInput("not a cSculpt diff message (file identifier is not \"" +
+                       std::string(fb::DiffMessageIdentifier()) + "\")");
+  // Explicit limits: depth 8 is more than the schema nests; the table count bounds the
+  // channels; the size bound is the buffer itself.
+  flatbuffers::Verifier verifier(bytes.data(), bytes.size(), /*max_depth=*/8,
+                                 /*max_tables=*/limits.max_channels * 2 + 8);
+  if (!fb::VerifyDiffMessageBuffer(verifier))
+    throw InvalidInput("diff message failed FlatBuffers verification (corrupt or truncated)");
+  return fb::GetDiffMessage(bytes.data());
+}
+
+DiffHeader header_of(const fb::DiffMessage& m) {
+  DiffHeader h;
+  h.protocol = m.protocol();
+  h.base_version = m.base_version();
+  h.sequence = m.sequence();
+  if (m.author()) {
+    if (m.author()->size() > max_author_bytes)
+      throw InvalidInput("diff message author is " + std::to_string(m.author()->size()) +
+                         " bytes (at most " + std::to_string(max_author_bytes) + ")");
+    h.author = std::string_view(m.author()->data(), m.author()->size());
+    if (h.author.find('\0') != std::string_view::npos)
+      throw InvalidInput("diff message author contains a NUL byte");
+  }
+  h.vertex_count = m.vertex_count();
+  if (h.protocol == 0 || h.protocol > wire_protocol_version)
+    throw InvalidInput("diff message has protocol " + std::to_string(h.protocol) +
+                       "; this build reads 1 to " + std::to_string(wire_protocol_version));
+  return h;
+}
+
+void decode_attribute(const fb::AttributeChanges* a, const float* base, std::uint32_t width,
+                      std::uint32_t vertex_count, const std::string& what, AttributeDiff& out) {
+  if (a == nullptr) return;
+  const std::uint32_t count = a->count();
+  if (count > vertex_count)
+    throw InvalidInput(what + ": " + std::to_string(count) + " changed vertices but the mesh has " +
+                       std::to_string(vertex_count));
+  const auto* gaps = a->index_gaps();
+  if (count > 0 && gaps == nullptr) throw InvalidInput(what + ": indices missing");
+  // Each varint is at least one byte: a cheap bound before allocating.
+  if (gaps && gaps->size() < count)
+    throw InvalidInput(what + ": " + std::to_string(count) + " indices in " +
+                       std::to_string(gaps->size()) + " bytes");
+  out.indices.resize(count);
+  if (count > 0) {
+    VarintReader r(gaps->data(), gaps->size(), what + " indices");
+    std::uint64_t next = 0;
+    for (std::uint32_t i = 0; i < count; ++i) {
+      const std::uint64_t index = next + r.next();
+      if (index >= vertex_count)
+        throw InvalidInput(what + ": vertex index " + std::to_string(index) + " out of range (" +
+                           std::to_string(vertex_count) + " vertices)");
+      out.indices[i] = static_cast<std::uint32_t>(index);
+      next = index + 1;
+    }
+    if (!r.done())
+      throw InvalidInput(what + ": bytes left over after " + std::to_string(count) + " indices");
+  } else if (gaps && gaps->size() != 0) {
+    throw InvalidInput(what + ": index bytes but no changed vertices");
+  }
+
+  const auto* values = a->values();
+  const std::size_t n = std::size_t{count} * width;
+  const std::size_t bytes = values ? values->size() : 0;
+  out.values.resize(n);
+  switch (a->coding()) {
+    case fb::ValueCoding::Float32: {
+      if (bytes != n * sizeof(float))
+        throw InvalidInput(what + ": " + std::to_string(bytes) + " value bytes for " +
+                           std::to_string(count) + " vertices of width " + std::to_string(width) +
+                           " (expected " + std::to_string(n * sizeof(float)) + ")");
+      if (n) std::memcpy(out.values.data(), values->data(), n * sizeof(float));
+      break;
+    }
+    case fb::ValueCoding::QuantisedDelta:
+    case fb::ValueCoding::QuantisedDeltaPredicted: {
+      const double step = a->step();
+      if (!(std::isfinite(step) && step > 0))
+        throw InvalidInput(what + ": quantisation step " + std::to_string(step) +
+                           " is not a finite positive number");
+      if (bytes < n)
+        throw InvalidInput(what + ": " + std::to_string(n) + " values in " + std::to_string(bytes) +
+                           " bytes");
+      const bool predicted = a->coding() == fb::ValueCoding::QuantisedDeltaPredicted;
+      VarintReader r(n ? values->data() : nullptr, bytes, what + " values");
+      for (std::uint32_t c = 0; c < width; ++c) {
+        std::int64_t q = 0;
+        for (std::uint32_t i = 0; i < count; ++i) {
+          const std::int64_t stored = unzigzag(r.next());
+          // Wrapping add: a hostile stream may overflow; the value is checked below anyway.
+          q = predicted ? static_cast<std::int64_t>(static_cast<std::uint64_t>(q) +
+                                                    static_cast<std::uint64_t>(stored))
+                        : stored;
+          const std::size_t v = out.indices[i];
+          const double value = double(base[v * width + c]) + double(q) * step;
+          const float f = static_cast<float>(value);
+          if (!std::isfinite(value) || !std::isfinite(f))
+            throw InvalidInput(what + ": value of vertex " + std::to_string(v) + " is not finite");
+          out.values[std::size_t{i} * width + c] = f;
+        }
+      }
+      if (!r.done())
+        throw InvalidInput(what + ": bytes left over after " + std::to_string(n) + " values");
+      return;  // finite by construction
+    }
+    default:
+      throw InvalidInput(what + ": unknown value coding " +
+                         std::to_string(static_cast<unsigned>(a->coding())));
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    if (!std::isfinite(out.values[i]))
+      throw InvalidInput(what + ": value of vertex " + std::to_string(out.indices[i / width]) +
+                         " is not finite");
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> encode_diff(const Diff& diff, const Mesh& base, const DiffHeader& header,
+                                      const EncodeOptions& options) {
+  validate(diff, base, "encode_diff");
+  if (header.author.size() > max_author_bytes)
+    throw InvalidInput("encode_diff: author is " + std::to_string(header.author.size()) +
+                       " bytes (at most " + std::to_string(max_author_bytes) + ")");
+  if (!(options.position_tolerance >= 0) || !(options.channel_tolerance >= 0) ||
+      !(options.position_scale >= 0))
+    throw InvalidInput("encode_diff: tolerances and scale must be >= 0");
+  double scale = options.position_scale;
+  if (scale == 0 && options.position_tolerance > 0) scale = bbox_diagonal(base.positions);
+  if (scale == 0) scale = 1;  // a point-like mesh: the tolerance is absolute
+
+  flatbuffers::FlatBufferBuilder b(1024 + diff.positions.size() * 8);
+  static_assert(sizeof(Vec3f) == 3 * sizeof(float));
+  const auto positions = build_attribute(
+      b, encode_attribute(diff.positions, reinterpret_cast<const float*>(base.positions.data()), 3,
+                          options.position_tolerance * scale));
+  std::vector<flatbuffers::Offset<fb::ChannelChanges>> channels;
+  for (const ChannelDiff& c : diff.channels) {
+    if (c.change.empty()) continue;
+    const Channel& bc = base.channels[static_cast<std::size_t>(base.find_channel(c.desc.name))];
+    const auto changes = build_attribute(
+        b, encode_attribute(c.change, bc.values.data(), c.desc.width, options.channel_tolerance));
+    channels.push_back(
+        fb::CreateChannelChanges(b, b.CreateString(c.desc.name), c.desc.width, changes));
+  }
+  const auto author = b.CreateString(header.author.data(), header.author.size());
+  const auto channel_vector = b.CreateVector(channels);
+  const auto message =
+      fb::CreateDiffMessage(b, wire_protocol_version, header.base_version, author, header.sequence,
+                            diff.vertex_count, positions, channel_vector);
+  fb::FinishDiffMessageBuffer(b, message);
+  return {b.GetBufferPointer(), b.GetBufferPointer() + b.GetSize()};
+}
+
+DiffHeader peek_diff_header(std::span<const std::uint8_t> bytes, const DecodeLimits& limits) {
+  return header_of(*verified_message(bytes, limits));
+}
+
+Diff decode_diff(std::span<const std::uint8_t> bytes, const Mesh& base, DiffHeader* header,
+                 const DecodeLimits& limits) {
+  const fb::DiffMessage& m = *verified_message(bytes, limits);
+  DiffHeader h = header_of(m);
+  if (h.vertex_count != base.vertex_count())
+    throw InvalidInput("diff message is for " + std::to_string(h.vertex_count) +
+                       " vertices but the base mesh has " + std::to_string(base.vertex_count()));
+  Diff d;
+  d.vertex_count = h.vertex_count;
+  decode_attribute(m.positions(), reinterpret_cast<const float*>(base.positions.data()), 3,
+                   d.vertex_count, "diff message positions", d.positions);
+  d.channels.resize(base.channels.size());
+  for (std::size_t c = 0; c < base.channels.size(); ++c) d.channels[c].desc = base.channels[c].desc;
+  if (const auto* channels = m.channels()) {
+    if (channels->size() > limits.max_channels || channels->size() > base.channels.size())
+      throw InvalidInput("diff message has " + std::to_string(channels->size()) +
+                         " channels; the base mesh has " + std::to_string(base.channels.size()));
+    std::vector<bool> seen(base.channels.size(), false);
+    for (const fb::ChannelChanges* c : *channels) {
+      const std::string name(c->name()->data(), c->name()->size());
+      const int index = base.find_channel(name);
+      const std::string what = "diff message channel '" + name + "'";
+      if (index < 0) throw InvalidInput(what + " does not exist in the base mesh");
+      const auto k = static_cast<std::size_t>(index);
+      if (seen[k]) throw InvalidInput(what + " appears twice");
+      seen[k] = true;
+      const Channel& bc = base.channels[k];
+      if (c->width() != bc.desc.width)
+        throw InvalidInput(what + " has width " + std::to_string(c->width()) +
+                           " but the base's has " + std::to_string(bc.desc.width));
+      decode_attribute(c->changes(), bc.values.data(), bc.desc.width, d.vertex_count, what,
+                       d.channels[k].change);
+    }
+  }
+  if (header) *header = h;
+  return d;
+}
+
+}  // namespace csculpt
