@@ -22,7 +22,8 @@
  *   by another thread during that call. Calls that only read a handle (marked "reads") may run
  *   concurrently on it. csc_hierarchy is immutable once built and may be shared freely.
  * - Errors. Bad arguments (NULL where a pointer is needed, a wrong struct_size, a handle of
- *   another kind or already destroyed, where detectable) give CSC_ERROR_INVALID_ARGUMENT.
+ *   another kind) give CSC_ERROR_INVALID_ARGUMENT. A destroyed handle must not be passed again
+ *   (its memory is gone: undefined behaviour, as for free()).
  *   Bad data (a malformed file or message, a diff for another mesh, NaN/Inf) gives
  *   CSC_ERROR_INVALID_INPUT. No C++ exception, type or STL object crosses this boundary.
  * - Growth. Option and description structs start with `struct_size` (set it with the
@@ -74,7 +75,7 @@ CSC_API uint32_t csc_wire_protocol_version(void);
 
 typedef enum csc_status {
   CSC_OK = 0,
-  /** A NULL or out-of-range argument, a wrong struct_size, a foreign or destroyed handle. */
+  /** A NULL or out-of-range argument, a wrong struct_size, a handle of another kind. */
   CSC_ERROR_INVALID_ARGUMENT = 1,
   /** Data that cannot be used: malformed file or message, mismatched mesh, NaN/Inf. */
   CSC_ERROR_INVALID_INPUT = 2,

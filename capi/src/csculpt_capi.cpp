@@ -18,8 +18,9 @@
 
 namespace {
 
-// Each handle starts with a tag, so a handle of another kind (or one already destroyed, while
-// its memory is still ours) is refused instead of misread.
+// Each handle starts with a tag, so a handle of another kind is refused instead of misread.
+// Destroy clears it, which helps catch some double destroys; a destroyed handle is still
+// undefined behaviour to pass (the header says so).
 enum class Tag : std::uint32_t {
   dead = 0,
   mesh = 0x4d455348,       // "MESH"
@@ -119,13 +120,15 @@ template <class Handle>
 Handle& handle(Handle* h, Tag tag, const char* name) {
   if (h == nullptr) bad_argument(std::string(name) + " is NULL");
   if (h->tag != tag)
-    bad_argument(std::string(name) + " is not a live handle of the right kind (destroyed, or " +
-                 "another kind of handle)");
+    bad_argument(std::string(name) + " is not a handle of the right kind");
   return *h;
 }
 
-/// Checks an options/description struct's declared size: at least the first published
-/// layout (`minimum`), which for this ABI version is the whole struct.
+/// The size of a struct's first published layout (ABI 0.2): the least a caller's struct_size
+/// may say. When a struct grows, specialise this with its old size so older hosts keep working.
+template <class T>
+constexpr std::size_t first_published_size = sizeof(T);
+
 void require_struct_size(std::uint32_t declared, std::size_t minimum, const char* name) {
   if (declared < minimum)
     bad_argument(std::string(name) + "->struct_size is " + std::to_string(declared) +
@@ -133,12 +136,24 @@ void require_struct_size(std::uint32_t declared, std::size_t minimum, const char
                  " expected (initialise it with the _INIT macro)");
 }
 
-/// Writes an output struct: at most the caller's declared size, which must cover the first
-/// published layout; the caller's struct_size is kept.
+/// Reads an input struct: fields past the caller's struct_size (a host built against an older
+/// header) keep `defaults`; fields past ours (a newer host) are not read.
+template <class T>
+T read_in(const T* in, const T& defaults, const char* name) {
+  require_pointer(in, name);
+  require_struct_size(in->struct_size, first_published_size<T>, name);
+  T value = defaults;
+  std::memcpy(static_cast<void*>(&value), in, std::min<std::size_t>(in->struct_size, sizeof(T)));
+  value.struct_size = sizeof(T);
+  return value;
+}
+
+/// Writes an output struct: at most the caller's declared size (which must cover the first
+/// published layout); the caller's struct_size is kept.
 template <class T>
 void write_out(T* out, const T& value, const char* name) {
   require_pointer(out, name);
-  require_struct_size(out->struct_size, sizeof(T), name);
+  require_struct_size(out->struct_size, first_published_size<T>, name);
   const std::uint32_t size = out->struct_size;
   std::memcpy(static_cast<void*>(out), &value, std::min<std::size_t>(size, sizeof(T)));
   out->struct_size = size;
@@ -166,10 +181,12 @@ std::span<const float> floats(const std::vector<csculpt::Vec3f>& v) {
   return {reinterpret_cast<const float*>(v.data()), v.size() * 3};
 }
 
-/// The diff as host arrays would give it, checked against the base mesh's layout.
-void check_arrays(const csc_vertex_arrays* a, const csculpt::Mesh& base, const char* name) {
-  require_pointer(a, name);
-  require_struct_size(a->struct_size, sizeof(csc_vertex_arrays), name);
+/// The host's arrays, checked against the base mesh's layout.
+csc_vertex_arrays host_arrays(const csc_vertex_arrays* in, const csculpt::Mesh& base,
+                              const char* name) {
+  const csc_vertex_arrays defaults = CSC_VERTEX_ARRAYS_INIT;
+  const csc_vertex_arrays arrays = read_in(in, defaults, name);
+  const csc_vertex_arrays* a = &arrays;
   if (a->vertex_count != base.vertex_count())
     bad_argument(std::string(name) + " has " + std::to_string(a->vertex_count) +
                  " vertices but the base mesh has " + std::to_string(base.vertex_count()));
@@ -179,6 +196,7 @@ void check_arrays(const csc_vertex_arrays* a, const csculpt::Mesh& base, const c
                  " channels but the base mesh has " + std::to_string(base.channels.size()));
   if (a->channel_count > 0 && a->channels == nullptr)
     bad_argument(std::string(name) + "->channels is NULL");
+  return arrays;
 }
 
 std::unique_ptr<csc_diff> new_diff(csculpt::Diff d) {
@@ -237,11 +255,12 @@ CSC_API const char* csc_last_error(void) {
 
 // ---- Meshes ------------------------------------------------------------------------------
 
-CSC_API csc_status csc_mesh_create(csc_mesh** out, const csc_mesh_desc* desc) {
+CSC_API csc_status csc_mesh_create(csc_mesh** out, const csc_mesh_desc* desc_in) {
   return guarded("csc_mesh_create", [&] {
     require_pointer(out, "out");
-    require_pointer(desc, "desc");
-    require_struct_size(desc->struct_size, sizeof(csc_mesh_desc), "desc");
+    const csc_mesh_desc defaults = CSC_MESH_DESC_INIT;
+    const csc_mesh_desc description = read_in(desc_in, defaults, "desc");
+    const csc_mesh_desc* desc = &description;
     if (desc->vertex_count > 0 && desc->positions == nullptr)
       bad_argument("desc->positions is NULL");
     if (desc->triangle_count > 0 && desc->triangles == nullptr)
@@ -394,11 +413,12 @@ CSC_API csc_status csc_hierarchy_build(csc_hierarchy** out, const csc_mesh* mesh
     const csculpt::Mesh& m = handle(mesh, Tag::mesh, "mesh").mesh;
     csculpt::HierarchyOptions o;
     if (options != nullptr) {
-      require_struct_size(options->struct_size, sizeof(csc_hierarchy_options), "options");
-      if (options->max_parents < 1 || options->max_parents > 32)
-        bad_argument("options->max_parents is " + std::to_string(options->max_parents) +
+      const csc_hierarchy_options defaults = CSC_HIERARCHY_OPTIONS_INIT;
+      const csc_hierarchy_options in = read_in(options, defaults, "options");
+      if (in.max_parents < 1 || in.max_parents > 32)
+        bad_argument("options->max_parents is " + std::to_string(in.max_parents) +
                      " (1 to 32 allowed)");
-      o.max_parents = options->max_parents;
+      o.max_parents = in.max_parents;
     }
     auto h = std::unique_ptr<csc_hierarchy>(new csc_hierarchy{
         Tag::hierarchy,
@@ -440,20 +460,20 @@ CSC_API uint64_t csc_hierarchy_digest(const csc_hierarchy* hierarchy) {
 // ---- Diffs -------------------------------------------------------------------------------
 
 CSC_API csc_status csc_diff_capture_arrays(csc_diff** out, const csc_mesh* base,
-                                           const csc_vertex_arrays* current) {
+                                           const csc_vertex_arrays* current_in) {
   return guarded("csc_diff_capture_arrays", [&] {
     require_pointer(out, "out");
     const csculpt::Mesh& b = handle(base, Tag::mesh, "base").mesh;
-    check_arrays(current, b, "current");
+    const csc_vertex_arrays current = host_arrays(current_in, b, "current");
     csculpt::Diff d;
     d.vertex_count = static_cast<std::uint32_t>(b.vertex_count());
     d.positions = csculpt::capture_attribute(floats(b.positions),
-                                             {current->positions, b.vertex_count() * 3}, 3);
+                                             {current.positions, b.vertex_count() * 3}, 3);
     for (std::size_t c = 0; c < b.channels.size(); ++c) {
       const csculpt::Channel& bc = b.channels[c];
       csculpt::ChannelDiff cd{bc.desc, {}};
-      if (current->channels[c] != nullptr)
-        cd.change = csculpt::capture_attribute(bc.values, {current->channels[c], bc.values.size()},
+      if (current.channels[c] != nullptr)
+        cd.change = csculpt::capture_attribute(bc.values, {current.channels[c], bc.values.size()},
                                                bc.desc.width);
       d.channels.push_back(std::move(cd));
     }
@@ -484,17 +504,17 @@ CSC_API csc_status csc_mesh_apply_diff(csc_mesh* mesh, const csc_diff* diff) {
 }
 
 CSC_API csc_status csc_diff_apply_arrays(const csc_diff* diff, const csc_mesh* base,
-                                         const csc_vertex_arrays* target) {
+                                         const csc_vertex_arrays* target_in) {
   return guarded("csc_diff_apply_arrays", [&] {
     const csculpt::Diff& d = handle(diff, Tag::diff, "diff").diff;
     const csculpt::Mesh& b = handle(base, Tag::mesh, "base").mesh;
-    check_arrays(target, b, "target");
+    const csc_vertex_arrays target = host_arrays(target_in, b, "target");
     csculpt::validate(d, b, "diff");
     for (std::size_t i = 0; i < d.positions.indices.size(); ++i)
-      std::memcpy(target->positions + std::size_t{3} * d.positions.indices[i],
+      std::memcpy(target.positions + std::size_t{3} * d.positions.indices[i],
                   d.positions.values.data() + 3 * i, 3 * sizeof(float));
     for (const csculpt::ChannelDiff& c : d.channels) {
-      float* values = target->channels[static_cast<std::size_t>(b.find_channel(c.desc.name))];
+      float* values = target.channels[static_cast<std::size_t>(b.find_channel(c.desc.name))];
       if (values == nullptr) continue;
       const std::uint32_t w = c.desc.width;
       for (std::size_t i = 0; i < c.change.indices.size(); ++i)
@@ -561,10 +581,7 @@ CSC_API csc_status csc_diff_encode(csc_bytes** out, const csc_diff* diff, const 
     const csculpt::Diff& d = handle(diff, Tag::diff, "diff").diff;
     const csculpt::Mesh& b = handle(base, Tag::mesh, "base").mesh;
     csc_encode_options o = CSC_ENCODE_OPTIONS_INIT;
-    if (options != nullptr) {
-      require_struct_size(options->struct_size, sizeof(csc_encode_options), "options");
-      o = *options;
-    }
+    if (options != nullptr) o = read_in(options, o, "options");
     if (!(o.position_tolerance >= 0) || !(o.channel_tolerance >= 0) || !(o.position_scale >= 0) ||
         !std::isfinite(o.position_tolerance) || !std::isfinite(o.channel_tolerance) ||
         !std::isfinite(o.position_scale))
@@ -619,7 +636,7 @@ csc_message_info message_info(const csculpt::DiffHeader& h, const char* author) 
 CSC_API csc_status csc_diff_peek(const void* data, size_t size, csc_message_info* info) {
   return guarded("csc_diff_peek", [&] {
     require_pointer(info, "info");
-    require_struct_size(info->struct_size, sizeof(csc_message_info), "info");
+    require_struct_size(info->struct_size, first_published_size<csc_message_info>, "info");
     const csculpt::DiffHeader h = csculpt::peek_diff_header(byte_span(data, size));
     // FlatBuffers strings are NUL-terminated in the buffer (checked by the verifier), and an
     // author with an inner NUL is refused, so the view is a C string; "" when absent.
@@ -632,7 +649,8 @@ CSC_API csc_status csc_diff_decode(csc_diff** out, const csc_mesh* base, uint64_
   return guarded("csc_diff_decode", [&] {
     require_pointer(out, "out");
     const csculpt::Mesh& b = handle(base, Tag::mesh, "base").mesh;
-    if (info != nullptr) require_struct_size(info->struct_size, sizeof(csc_message_info), "info");
+    if (info != nullptr)
+      require_struct_size(info->struct_size, first_published_size<csc_message_info>, "info");
     const auto bytes = byte_span(data, size);
     const csculpt::DiffHeader peeked = csculpt::peek_diff_header(bytes);
     if (peeked.base_version != base_version)
@@ -714,10 +732,7 @@ CSC_API csc_status csc_merger_merge(csc_merger* merger, csc_diff** out, const cs
       pointers[i] = &handle(diffs[i], Tag::diff, name.c_str()).diff;
     }
     csc_merge_options o = CSC_MERGE_OPTIONS_INIT;
-    if (options != nullptr) {
-      require_struct_size(options->struct_size, sizeof(csc_merge_options), "options");
-      o = *options;
-    }
+    if (options != nullptr) o = read_in(options, o, "options");
     const MethodName* method = find_method(o.method);
     if (method == nullptr)
       bad_argument("options->method " + std::to_string(static_cast<long long>(o.method)) +
