@@ -376,7 +376,8 @@ typedef enum csc_merge_method {
 
 /** "full", "single-parent", ...; NULL for an unknown value. Static storage. */
 CSC_API const char* csc_merge_method_name(csc_merge_method method);
-/** Parses a name csc_merge_method_name gives. */
+/** Parses a name csc_merge_method_name gives; CSC_ERROR_INVALID_ARGUMENT (listing the valid
+ *  names) for any other. */
 CSC_API csc_status csc_merge_method_from_name(csc_merge_method* out, const char* name);
 
 typedef struct csc_merge_options {

@@ -119,8 +119,7 @@ bool is(const Handle* h, Tag tag) {
 template <class Handle>
 Handle& handle(Handle* h, Tag tag, const char* name) {
   if (h == nullptr) bad_argument(std::string(name) + " is NULL");
-  if (h->tag != tag)
-    bad_argument(std::string(name) + " is not a handle of the right kind");
+  if (h->tag != tag) bad_argument(std::string(name) + " is not a handle of the right kind");
   return *h;
 }
 
@@ -187,13 +186,14 @@ csc_vertex_arrays host_arrays(const csc_vertex_arrays* in, const csculpt::Mesh& 
   const csc_vertex_arrays defaults = CSC_VERTEX_ARRAYS_INIT;
   const csc_vertex_arrays arrays = read_in(in, defaults, name);
   const csc_vertex_arrays* a = &arrays;
+  // Counts that do not match the base are bad data (the header's contract), not a bad call.
   if (a->vertex_count != base.vertex_count())
-    bad_argument(std::string(name) + " has " + std::to_string(a->vertex_count) +
-                 " vertices but the base mesh has " + std::to_string(base.vertex_count()));
+    throw InvalidInput(std::string(name) + " has " + std::to_string(a->vertex_count) +
+                       " vertices but the base mesh has " + std::to_string(base.vertex_count()));
   if (a->positions == nullptr) bad_argument(std::string(name) + "->positions is NULL");
   if (a->channel_count != base.channels.size())
-    bad_argument(std::string(name) + " has " + std::to_string(a->channel_count) +
-                 " channels but the base mesh has " + std::to_string(base.channels.size()));
+    throw InvalidInput(std::string(name) + " has " + std::to_string(a->channel_count) +
+                       " channels but the base mesh has " + std::to_string(base.channels.size()));
   if (a->channel_count > 0 && a->channels == nullptr)
     bad_argument(std::string(name) + "->channels is NULL");
   return arrays;
@@ -698,7 +698,12 @@ CSC_API csc_status csc_merge_method_from_name(csc_merge_method* out, const char*
   return guarded("csc_merge_method_from_name", [&] {
     require_pointer(out, "out");
     require_pointer(name, "name");
-    const csculpt::MergeMethod sdk = csculpt::merge_method_from_string(name);
+    csculpt::MergeMethod sdk{};
+    try {
+      sdk = csculpt::merge_method_from_string(name);
+    } catch (const InvalidInput& e) {
+      bad_argument(e.what());  // an unknown name is a caller's mistake, like method 99
+    }
     for (const MethodName& n : kMethods)
       if (n.sdk == sdk) *out = n.method;
   });

@@ -7,6 +7,9 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <optional>
 #include <unordered_map>
@@ -231,7 +234,8 @@ struct Element {
 struct Header {
   Format format = Format::ascii;
   std::vector<Element> elements;
-  std::vector<std::pair<std::string, Linearisation>> linearisations;  // from csculpt comments
+  std::vector<std::pair<std::string, Linearisation>> linearisations;    // from csculpt comments
+  std::vector<std::pair<std::string, std::pair<float, float>>> ranges;  // from csculpt comments
   std::size_t body_offset = 0;
   std::size_t body_line = 1;  // line number of the first body line (ascii)
 };
@@ -270,10 +274,13 @@ Header parse_header(std::string_view bytes, std::string_view what) {
     const std::string_view keyword = io_detail::next_token(rest);
     if (keyword.empty() || keyword == "obj_info") continue;
     if (keyword == "comment") {
-      // "comment csculpt linearisation <channel> <kind>" records a channel's linearisation
-      // when it differs from the default for its name.
+      // "comment csculpt linearisation <channel> <kind>" and "comment csculpt range <channel>
+      // <min> <max>" record a channel's linearisation and value range when they differ from
+      // the defaults for its name.
       std::string_view r = rest;
-      if (io_detail::next_token(r) == "csculpt" && io_detail::next_token(r) == "linearisation") {
+      if (io_detail::next_token(r) != "csculpt") continue;
+      const std::string_view what_kind = io_detail::next_token(r);
+      if (what_kind == "linearisation") {
         const std::string_view channel = io_detail::next_token(r);
         const std::string_view kind = io_detail::next_token(r);
         try {
@@ -281,6 +288,17 @@ Header parse_header(std::string_view bytes, std::string_view what) {
         } catch (const InvalidInput& e) {
           fail(e.what());
         }
+      } else if (what_kind == "range") {
+        const std::string channel(io_detail::next_token(r));
+        const std::string lo(io_detail::next_token(r)), hi(io_detail::next_token(r));
+        char* end_lo = nullptr;
+        char* end_hi = nullptr;
+        const float min_value = std::strtof(lo.c_str(), &end_lo);
+        const float max_value = std::strtof(hi.c_str(), &end_hi);
+        if (channel.empty() || lo.empty() || hi.empty() || *end_lo != 0 || *end_hi != 0 ||
+            std::isnan(min_value) || std::isnan(max_value) || min_value > max_value)
+          fail("malformed 'comment csculpt range <channel> <min> <max>' line");
+        h.ranges.emplace_back(channel, std::make_pair(min_value, max_value));
       }
       continue;
     }
@@ -578,9 +596,15 @@ void assign_roles(Header& h, Mesh& mesh, std::string_view what) {
       }
       std::unordered_map<std::string_view, Linearisation> declared;
       for (const auto& [name, lin] : h.linearisations) declared[name] = lin;  // last one wins
+      std::unordered_map<std::string_view, std::pair<float, float>> declared_ranges;
+      for (const auto& [name, range] : h.ranges) declared_ranges[name] = range;
       for (ChannelDesc& d : layout.channels) {
         if (const auto it = declared.find(d.name); it != declared.end()) {
           d.linearisation = it->second;
+        }
+        if (const auto it = declared_ranges.find(d.name); it != declared_ranges.end()) {
+          d.min_value = it->second.first;
+          d.max_value = it->second.second;
         }
         Channel c;
         c.desc = d;
@@ -785,6 +809,14 @@ std::string encode_ply(const Mesh& mesh, std::string_view what) {
     if (c.desc.linearisation != default_linearisation(c.desc.name)) {
       header += cat("comment csculpt linearisation ", c.desc.name, " ",
                     to_string(c.desc.linearisation), "\n");
+    }
+    const ChannelDesc defaults = default_channel(c.desc.name, c.desc.width);
+    if (c.desc.min_value != defaults.min_value || c.desc.max_value != defaults.max_value) {
+      // %.9g prints a float exactly (it reads back bit-identical); inf as "inf"
+      char range[96];
+      std::snprintf(range, sizeof range, "%.9g %.9g", double(c.desc.min_value),
+                    double(c.desc.max_value));
+      header += cat("comment csculpt range ", c.desc.name, " ", range, "\n");
     }
   }
   header += cat("element vertex ", mesh.vertex_count(), "\n");

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -28,7 +29,9 @@ const char* non_finite_name(float v) {
 constexpr char kComponentNames[] = {'r', 'g', 'b', 'a'};
 
 std::string describe(const ChannelDesc& d) {
-  return cat(d.name, " (width ", d.width, ", ", to_string(d.linearisation), ")");
+  char range[64];
+  std::snprintf(range, sizeof range, "[%g, %g]", double(d.min_value), double(d.max_value));
+  return cat(d.name, " (width ", d.width, ", ", to_string(d.linearisation), ", range ", range, ")");
 }
 
 // sRGB transfer functions on [0, inf), evaluated in double so that a float survives the

@@ -41,25 +41,25 @@ std::int64_t unzigzag(std::uint64_t v) {
 /// Reads varints from a byte range; every failure names what was being read.
 class VarintReader {
  public:
-  VarintReader(const std::uint8_t* data, std::size_t size, std::string_view what)
-      : p_(data), end_(data + size), what_(what) {}
+  VarintReader(const std::uint8_t* data, std::size_t size, std::string what)
+      : p_(data), end_(data + size), what_(std::move(what)) {}
   std::uint64_t next() {
     std::uint64_t v = 0;
     for (int shift = 0; shift < 64; shift += 7) {
-      if (p_ == end_) throw InvalidInput(std::string(what_) + ": truncated varint");
+      if (p_ == end_) throw InvalidInput(what_ + ": truncated varint");
       const std::uint8_t b = *p_++;
       if (shift == 63 && b > 1) break;
       v |= std::uint64_t{b & 0x7fu} << shift;
       if (!(b & 0x80)) return v;
     }
-    throw InvalidInput(std::string(what_) + ": varint longer than 64 bits");
+    throw InvalidInput(what_ + ": varint longer than 64 bits");
   }
   bool done() const { return p_ == end_; }
 
  private:
   const std::uint8_t* p_;
   const std::uint8_t* end_;
-  std::string_view what_;
+  std::string what_;  // owned: callers pass temporaries
 };
 
 // ---- encoding ------------------------------------------------------------------------------

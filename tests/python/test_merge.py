@@ -243,7 +243,7 @@ class Merge(unittest.TestCase):
             self.merger.merge(s.base, [])
         with self.assertRaisesRegex(csculpt.InvalidArgument, "count is 65"):
             self.merger.merge(s.base, [s.da] * 65)
-        with self.assertRaisesRegex(csculpt.InvalidInput, "unknown merge method 'blend'"):
+        with self.assertRaisesRegex(csculpt.InvalidArgument, "unknown merge method 'blend'"):
             self.merger.merge(s.base, [s.da], method="blend")
         with self.assertRaisesRegex(csculpt.InvalidArgument, "not a merge method"):
             self.merger.merge(s.base, [s.da], method=99)

@@ -178,8 +178,8 @@ TEST(MeshConnectivity, ReportsTheFirstDifference) {
   edited = base;
   edited.channels[2].desc.linearisation = Linearisation::identity;
   EXPECT_EQ(invalid_input_message([&] { check_same_connectivity(base, edited, "e5"); }),
-            "e5: channel 2 is roughness (width 1, identity) but in the base it is roughness "
-            "(width 1, square)");
+            "e5: channel 2 is roughness (width 1, identity, range [0, 1]) but in the base it is "
+            "roughness (width 1, square, range [0, 1])");
 }
 
 // ------------------------------------------------------------------------------------------
