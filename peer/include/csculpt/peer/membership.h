@@ -1,0 +1,107 @@
+// Who is in a session and who merges: heartbeat-based membership with two thresholds (zyre's
+// evasive / expired) and an epoch-numbered election whose rule is deterministic (the live
+// peer with the lowest id). Pure logic: time is passed in, so tests drive it with their own
+// clock and no sockets.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace csculpt::peer {
+
+using PeerId = std::uint64_t;
+using Clock = std::chrono::steady_clock;
+using Millis = std::chrono::milliseconds;
+
+struct MembershipOptions {
+  Millis heartbeat{200};  ///< how often a peer says it is alive
+  Millis evasive{600};    ///< silent this long: evasive (reported, still a member)
+  Millis expired{1200};   ///< silent this long: gone (removed; a merger re-elected)
+};
+
+struct Member {
+  PeerId id = 0;
+  std::string endpoint;
+  Clock::time_point last_heard{};
+  bool evasive = false;
+};
+
+/// The members one peer knows of, itself included.
+class Membership {
+ public:
+  Membership(PeerId self, std::string self_endpoint, MembershipOptions options = {});
+
+  struct Changes {
+    std::vector<PeerId> joined;   ///< heard of for the first time
+    std::vector<PeerId> evasive;  ///< crossed the evasive threshold
+    std::vector<PeerId> expired;  ///< crossed the expired threshold, removed
+    bool empty() const { return joined.empty() && evasive.empty() && expired.empty(); }
+  };
+
+  /// We heard from `peer` (any verified message) at `now`. Returns true if it is new.
+  bool heard(PeerId peer, const std::string& endpoint, Clock::time_point now);
+  /// We learnt of `peer` from someone else (gossip): added as if heard at `now`, so an
+  /// unreachable one expires after the threshold. Returns true if it is new.
+  bool learnt(PeerId peer, const std::string& endpoint, Clock::time_point now);
+  /// `peer` said it leaves (or is known dead): removed at once.
+  bool remove(PeerId peer);
+  /// Applies the thresholds at `now`: marks evasive peers, removes expired ones.
+  Changes tick(Clock::time_point now);
+
+  PeerId self() const { return self_; }
+  bool contains(PeerId peer) const { return members_.count(peer) != 0; }
+  /// Every member, self included, in increasing id order.
+  std::vector<PeerId> ids() const;
+  const std::map<PeerId, Member>& members() const { return members_; }
+  /// The others (not self), in increasing id order.
+  std::vector<const Member*> others() const;
+  const MembershipOptions& options() const { return options_; }
+
+ private:
+  PeerId self_;
+  MembershipOptions options_;
+  std::map<PeerId, Member> members_;
+  /// Peers seen to expire: gossip about them is not believed for a while.
+  std::map<PeerId, Clock::time_point> tombstones_;
+};
+
+/// One merger per epoch (Raft's one leader per term), chosen by a deterministic rule among
+/// live peers: the lowest id. A peer that finds the merger gone and itself the lowest live id
+/// starts epoch + 1 and announces it; others follow an announcement of a higher epoch (or of
+/// the same epoch from a lower id, which settles two peers that started the same epoch with
+/// different views). Work of a stale epoch is ignored, so two mergers never both publish a
+/// version a peer accepts.
+class Election {
+ public:
+  explicit Election(PeerId self) : self_(self) {}
+
+  /// What this peer should announce, if anything, given the live members.
+  struct Decision {
+    bool announce = false;  ///< we became the merger of epoch(): tell everyone
+    bool changed = false;   ///< the merger changed (to us or to someone else)
+  };
+  Decision update(const Membership& membership);
+
+  /// An announcement from `merger` for `epoch`. Returns true if we now follow it.
+  bool on_announcement(std::uint64_t epoch, PeerId merger, const Membership& membership);
+
+  /// Whether a message of `epoch` about merging (versions, elections) is stale.
+  bool is_stale(std::uint64_t epoch) const { return epoch < epoch_; }
+
+  std::uint64_t epoch() const { return epoch_; }
+  std::optional<PeerId> merger() const { return merger_; }
+  bool is_merger() const { return merger_ == self_; }
+  /// Adopts a known state (a joiner learns it from the session).
+  void adopt(std::uint64_t epoch, PeerId merger);
+
+ private:
+  PeerId self_;
+  std::uint64_t epoch_ = 0;
+  std::optional<PeerId> merger_;
+};
+
+}  // namespace csculpt::peer

@@ -1,0 +1,165 @@
+// A serverless editing session over ZeroMQ (protocol: peer/schema/session.fbs).
+//
+// Every peer binds one ROUTER socket and connects one DEALER to each other peer; every socket
+// is CURVE-encrypted and authenticated with keys carried by the invite, so a process without
+// the invite can neither join nor read anything. Membership spreads by heartbeats; the live
+// peer with the lowest id merges (epoch-numbered election, see membership.h). Peers send
+// their edit since the last agreed version (cumulative, replacing what they sent before); the
+// merger merges every sync interval and broadcasts version v+1 with a hash chain. A peer that
+// sees a gap fetches what it missed; a late joiner gets a snapshot of the current version and
+// what follows (the ZeroMQ guide's Clone pattern). Networking runs on its own thread: the
+// host's calls never wait on the network.
+//
+// Host side (one thread): submit() sends the local edit; update() applies the merged versions
+// received so far and rebases the local edits made since onto them with the SDK merge, so no
+// stroke is lost, doubled or blocked.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "csculpt/mesh.h"
+#include "csculpt/peer/membership.h"
+#include "csculpt/wire.h"
+
+namespace csculpt::peer {
+
+struct SessionOptions {
+  /// Where this peer listens: a ZeroMQ endpoint; port * picks a free one.
+  std::string bind = "tcp://127.0.0.1:*";
+  /// Shown to others (author of diffs).
+  std::string name;
+  /// This peer's id (the election picks the lowest live id); 0 = random.
+  PeerId id = 0;
+  /// The merger merges this often (50 ms to minutes; the paper used 5 s and 20 s).
+  Millis sync{250};
+  MembershipOptions membership;
+  /// Wire tolerances of submitted and merged diffs (see wire.h). A change of a vertex smaller
+  /// than the position tolerance within one submit is not sent.
+  EncodeOptions wire;
+  /// Largest message a socket accepts (ZMQ_MAXMSGSIZE); snapshots go in chunks below it.
+  std::size_t max_message_bytes = std::size_t{64} << 20;
+  std::size_t snapshot_chunk_bytes = std::size_t{1} << 20;
+  /// Largest snapshot a joiner accepts.
+  std::size_t max_snapshot_bytes = std::size_t{2} << 30;
+};
+
+enum class EventKind : std::uint32_t {
+  joined = 0,          ///< this peer holds the session's mesh (a joiner: the snapshot came)
+  version = 1,         ///< a merged version is ready for update()
+  peer_joined = 2,     ///< `peer` joined
+  peer_evasive = 3,    ///< `peer` has been silent past the evasive threshold
+  peer_left = 4,       ///< `peer` left or expired
+  merger_changed = 5,  ///< `peer` merges from epoch `epoch` on
+  dropped = 6,         ///< a message was malformed or hostile and dropped (`message` says why)
+  error = 7,           ///< something failed on the network thread (`message`)
+};
+
+struct Event {
+  EventKind kind = EventKind::error;
+  PeerId peer = 0;
+  std::uint64_t version = 0;
+  std::uint64_t epoch = 0;
+  std::string message;
+};
+
+struct SessionStats {
+  PeerId id = 0;
+  std::uint64_t version = 0;  ///< the network thread's agreed version
+  std::uint64_t epoch = 0;
+  PeerId merger = 0;  ///< 0 while none is known
+  std::uint32_t members = 0;
+  // this peer as an author
+  std::uint64_t submits = 0;
+  std::uint64_t submit_bytes = 0;
+  std::uint64_t strokes_submitted = 0;     ///< strokes the host reported
+  std::uint64_t strokes_acknowledged = 0;  ///< of those, seen inside a merged version
+  std::uint64_t versions_applied = 0;      ///< by update()
+  std::uint64_t rebases = 0;               ///< updates that had local edits to carry over
+  // this peer as the merger
+  std::uint64_t merges = 0;
+  std::uint64_t merged_strokes = 0;
+  std::uint64_t conflicting_strokes = 0;  ///< a conflict-rejecting system would refuse these
+  double merge_ms_sum = 0;
+  double merge_ms_max = 0;
+  std::uint64_t version_bytes_sent = 0;
+  // traffic and hostility
+  std::uint64_t messages_received = 0;
+  std::uint64_t bytes_received = 0;
+  std::uint64_t messages_dropped = 0;  ///< malformed, hostile, another session's
+  std::uint64_t stale_ignored = 0;     ///< of a stale epoch or from a non-merger
+  std::uint64_t auth_rejected = 0;     ///< connections without the session key
+  std::uint64_t snapshots_sent = 0;
+  std::uint64_t fetches = 0;
+};
+
+/// The decoded invite: endpoint of a member, session id and the CURVE secrets.
+struct Invite {
+  std::string endpoint;
+  std::uint64_t session = 0;
+  std::array<std::uint8_t, 32> server_secret{};
+  std::array<std::uint8_t, 32> client_secret{};
+};
+/// "csculpt1:<144 hex digits>@<endpoint>"; parse throws InvalidInput saying what is wrong.
+std::string format_invite(const Invite& invite);
+Invite parse_invite(const std::string& text);
+
+/// A 64-bit digest of a mesh's positions and channel values (convergence checks).
+std::uint64_t mesh_digest(const Mesh& mesh);
+
+class Session {
+ public:
+  /// Starts a session on `mesh` (this peer holds version 0 and merges). Throws on a mesh that
+  /// fails validate() or an endpoint that cannot be bound.
+  static std::unique_ptr<Session> create(const Mesh& mesh, const SessionOptions& options = {});
+  /// Joins with an invite and waits up to `timeout` for the snapshot. Throws InvalidInput for
+  /// a malformed invite, IoError if no snapshot came in time.
+  static std::unique_ptr<Session> join(const std::string& invite,
+                                       const SessionOptions& options = {},
+                                       Millis timeout = Millis{30000});
+  ~Session();  ///< leaves (tells the others) and stops the network thread
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
+
+  std::string invite() const;
+  PeerId id() const;
+  std::string endpoint() const;
+
+  // ---- host thread --------------------------------------------------------------------
+  /// The agreed version update() last applied, and its mesh.
+  std::uint64_t version() const;
+  const Mesh& base() const;
+  /// Sends the edit from base() to `local` (same connectivity and channels) to the merger,
+  /// replacing what was sent before for this base; `strokes` = strokes made since the last
+  /// submit. The changed values of `local` are set to what the peers receive (within the wire
+  /// tolerance). Returns false when there was nothing new to send. Never waits on the network.
+  bool submit(Mesh& local, std::uint32_t strokes = 0);
+  /// Applies every merged version received so far to base() and rebases `local` onto it:
+  /// local edits not yet inside a merged version are kept, edits already merged are not
+  /// applied twice. Returns the number of versions applied.
+  std::size_t update(Mesh& local);
+  /// Events since the last call (at most 10,000 are kept).
+  std::vector<Event> poll_events();
+  SessionStats stats() const;
+  /// Per peer that contributed, a value per vertex: how much of the agreed mesh's change at
+  /// that vertex came from it (the paper's Fig. 1/6 attribution).
+  std::vector<std::pair<PeerId, std::vector<float>>> attribution() const;
+  /// Tells the others and stops the network thread; the session is unusable afterwards.
+  void leave();
+
+ private:
+  struct Impl;
+  explicit Session(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Attribution as vertex colours (RGB in [0,1], vertex-major): peer k gets a hue (green,
+/// blue, red, ... in increasing id order), mixed by share; untouched vertices are light grey.
+std::vector<float> attribution_colours(
+    const std::vector<std::pair<PeerId, std::vector<float>>>& attribution,
+    std::size_t vertex_count);
+
+}  // namespace csculpt::peer

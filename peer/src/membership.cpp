@@ -1,0 +1,113 @@
+#include "csculpt/peer/membership.h"
+
+#include <algorithm>
+
+namespace csculpt::peer {
+
+Membership::Membership(PeerId self, std::string self_endpoint, MembershipOptions options)
+    : self_(self), options_(options) {
+  members_[self] = Member{self, std::move(self_endpoint), {}, false};
+}
+
+bool Membership::heard(PeerId peer, const std::string& endpoint, Clock::time_point now) {
+  if (peer == self_) return false;
+  tombstones_.erase(peer);  // a peer we hear from directly is alive, whatever we thought
+  auto [it, inserted] = members_.try_emplace(peer, Member{peer, endpoint, now, false});
+  if (!inserted) {
+    it->second.last_heard = now;
+    it->second.evasive = false;
+    if (!endpoint.empty()) it->second.endpoint = endpoint;
+  }
+  return inserted;
+}
+
+bool Membership::learnt(PeerId peer, const std::string& endpoint, Clock::time_point now) {
+  if (peer == self_ || members_.count(peer) || endpoint.empty()) return false;
+  // Gossip about a peer we saw expire is not believed until the tombstone ages out: the
+  // others may simply not have noticed yet.
+  if (auto t = tombstones_.find(peer); t != tombstones_.end()) {
+    if (now - t->second < 2 * options_.expired) return false;
+    tombstones_.erase(t);
+  }
+  members_.emplace(peer, Member{peer, endpoint, now, false});
+  return true;
+}
+
+bool Membership::remove(PeerId peer) {
+  if (peer == self_) return false;
+  return members_.erase(peer) != 0;
+}
+
+Membership::Changes Membership::tick(Clock::time_point now) {
+  Changes c;
+  for (auto it = members_.begin(); it != members_.end();) {
+    Member& m = it->second;
+    if (m.id == self_) {
+      ++it;
+      continue;
+    }
+    const auto silent = now - m.last_heard;
+    if (silent >= options_.expired) {
+      c.expired.push_back(m.id);
+      tombstones_[m.id] = now;
+      it = members_.erase(it);
+      continue;
+    }
+    if (silent >= options_.evasive && !m.evasive) {
+      m.evasive = true;
+      c.evasive.push_back(m.id);
+    }
+    ++it;
+  }
+  return c;
+}
+
+std::vector<PeerId> Membership::ids() const {
+  std::vector<PeerId> v;
+  v.reserve(members_.size());
+  for (const auto& [id, m] : members_) v.push_back(id);
+  return v;
+}
+
+std::vector<const Member*> Membership::others() const {
+  std::vector<const Member*> v;
+  for (const auto& [id, m] : members_)
+    if (id != self_) v.push_back(&m);
+  return v;
+}
+
+Election::Decision Election::update(const Membership& membership) {
+  Decision d;
+  const PeerId lowest = membership.ids().front();  // self is always a member
+  const bool merger_alive = merger_ && membership.contains(*merger_);
+  if (merger_alive) return d;
+  // No live merger: the lowest live id takes the next epoch. Others wait for its announcement
+  // (if it never comes, it expires too and the next lowest takes over).
+  if (lowest == self_) {
+    ++epoch_;
+    merger_ = self_;
+    d.announce = true;
+    d.changed = true;
+  } else if (merger_) {
+    merger_.reset();
+    d.changed = true;
+  }
+  return d;
+}
+
+bool Election::on_announcement(std::uint64_t epoch, PeerId merger, const Membership& membership) {
+  if (epoch < epoch_) return false;
+  if (epoch == epoch_ && merger_ && *merger_ <= merger) return false;
+  // A claimant we know to be dead (expired, not a member) is not followed.
+  if (!membership.contains(merger)) return false;
+  epoch_ = epoch;
+  merger_ = merger;
+  return true;
+}
+
+void Election::adopt(std::uint64_t epoch, PeerId merger) {
+  epoch_ = epoch;
+  merger_ = merger;
+}
+
+}  // namespace csculpt::peer

@@ -1,0 +1,89 @@
+// Membership thresholds and the election, driven by a clock the test controls.
+#include <gtest/gtest.h>
+
+#include "csculpt/peer/membership.h"
+
+namespace {
+
+using namespace csculpt::peer;
+using namespace std::chrono_literals;
+
+MembershipOptions thresholds() {
+  return {Millis{100}, Millis{300}, Millis{600}};
+}
+
+TEST(Membership, EvasiveThenExpiredThenGone) {
+  const Clock::time_point t0{};
+  Membership m(5, "tcp://a", thresholds());
+  EXPECT_TRUE(m.heard(7, "tcp://b", t0));
+  EXPECT_FALSE(m.heard(7, "", t0 + 50ms));  // known: refreshed, endpoint kept
+  EXPECT_EQ(m.members().at(7).endpoint, "tcp://b");
+  EXPECT_TRUE(m.tick(t0 + 340ms).empty());
+  auto c = m.tick(t0 + 360ms);
+  ASSERT_EQ(c.evasive, std::vector<PeerId>{7});
+  EXPECT_TRUE(m.tick(t0 + 400ms).empty());  // reported once
+  c = m.tick(t0 + 650ms);
+  ASSERT_EQ(c.expired, std::vector<PeerId>{7});
+  EXPECT_FALSE(m.contains(7));
+  EXPECT_EQ(m.ids(), std::vector<PeerId>{5});
+}
+
+TEST(Membership, GossipAboutAnExpiredPeerIsNotBelievedAtOnce) {
+  const Clock::time_point t0{};
+  Membership m(5, "tcp://a", thresholds());
+  m.heard(7, "tcp://b", t0);
+  m.tick(t0 + 700ms);
+  EXPECT_FALSE(m.learnt(7, "tcp://b", t0 + 800ms));  // others have not noticed yet
+  EXPECT_TRUE(m.learnt(7, "tcp://b", t0 + 700ms + 1300ms));
+  EXPECT_TRUE(m.heard(9, "tcp://c", t0));  // direct contact is always believed
+}
+
+TEST(Election, LowestLivePeerMergesAndAnnouncesANewEpoch) {
+  const Clock::time_point t0{};
+  Membership m(5, "tcp://a", thresholds());
+  m.heard(3, "tcp://b", t0);
+  m.heard(9, "tcp://c", t0);
+  Election e(5);
+  auto d = e.update(m);
+  EXPECT_FALSE(d.announce);  // 3 is lower: wait for its announcement
+  EXPECT_FALSE(e.merger());
+  EXPECT_TRUE(e.on_announcement(1, 3, m));
+  EXPECT_EQ(e.merger(), PeerId{3});
+  EXPECT_EQ(e.epoch(), 1u);
+  // 3 dies: 5 is now the lowest live id and starts epoch 2
+  m.tick(t0 + 700ms);
+  m.heard(9, "", t0 + 700ms);
+  EXPECT_FALSE(m.contains(3));
+  d = e.update(m);
+  EXPECT_TRUE(d.announce);
+  EXPECT_TRUE(e.is_merger());
+  EXPECT_EQ(e.epoch(), 2u);
+  // messages of epoch 1 are stale now; a late announcement of epoch 1 changes nothing
+  EXPECT_TRUE(e.is_stale(1));
+  EXPECT_FALSE(e.on_announcement(1, 3, m));
+  EXPECT_TRUE(e.is_merger());
+}
+
+TEST(Election, TwoClaimsOfOneEpochSettleOnTheLowerId) {
+  const Clock::time_point t0{};
+  Membership ma(4, "a", thresholds()), mb(6, "b", thresholds());
+  Election a(4), b(6);
+  // b did not know a yet and claimed epoch 1; a knows both and claims epoch 1 too.
+  ASSERT_TRUE(b.update(mb).announce);
+  ma.heard(6, "b", t0);
+  mb.heard(4, "a", t0);
+  ASSERT_TRUE(a.update(ma).announce);
+  EXPECT_FALSE(a.on_announcement(1, 6, ma));  // a keeps its own claim
+  EXPECT_TRUE(b.on_announcement(1, 4, mb));   // b yields to the lower id
+  EXPECT_EQ(a.merger(), b.merger());
+  EXPECT_EQ(a.epoch(), b.epoch());
+}
+
+TEST(Election, AClaimantThatIsNotAMemberIsNotFollowed) {
+  Membership m(5, "a", thresholds());
+  Election e(5);
+  EXPECT_FALSE(e.on_announcement(3, 99, m));  // forged or long dead
+  EXPECT_FALSE(e.merger());
+}
+
+}  // namespace
