@@ -132,4 +132,26 @@ int run_demo(const DemoOptions& o) {
   return 0;
 }
 
+CLI::App* add_demo_command(CLI::App& app, DemoOptions& o) {
+  CLI::App* demo = app.add_subcommand(
+      "demo", "a collaborative session in this process: artists sculpt and paint, edits merge");
+  demo->add_option("--artists", o.artists, "simulated artists")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 32u));
+  demo->add_option("--faces", o.faces, "faces of the built-in sphere")
+      ->capture_default_str()
+      ->check(CLI::Range(20u, 20000000u));
+  demo->add_option("--rounds", o.rounds, "sync rounds (one merge each)")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 100000u));
+  demo->add_option("--strokes", o.strokes_per_round, "strokes per artist per round")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 1000u));
+  demo->add_option("--method", o.method, "merge method")->capture_default_str();
+  demo->add_option("-o,--out", o.out, "final mesh (PLY with materials and attribution colours)")
+      ->capture_default_str();
+  demo->add_option("--seed", o.seed, "stroke seed")->capture_default_str();
+  return demo;
+}
+
 }  // namespace csculpt::cli

@@ -1,4 +1,5 @@
 #pragma once
+#include <CLI/CLI.hpp>
 #include <cstdint>
 #include <string>
 
@@ -18,5 +19,8 @@ struct DemoOptions {
 /// copy of the agreed version with scripted strokes, then the edits are merged into the
 /// next version. Prints a line per merge and a JSON summary; writes the final mesh.
 int run_demo(const DemoOptions& options);
+
+/// Registers `csculpt demo` and its options on `app`.
+CLI::App* add_demo_command(CLI::App& app, DemoOptions& options);
 
 }  // namespace csculpt::cli

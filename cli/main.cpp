@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "bench_merge.h"
+#include "bench_session.h"
 #include "bench_wire.h"
 #include "csculpt/diff.h"
 #include "csculpt/error.h"
@@ -15,6 +16,7 @@
 #include "csculpt/merge.h"
 #include "csculpt/scenarios.h"
 #include "demo.h"
+#include "peer_command.h"
 
 namespace {
 
@@ -162,26 +164,12 @@ int main(int argc, char** argv) {
   diff->add_option("base", base, "base mesh")->required()->check(CLI::ExistingFile);
   diff->add_option("edited", edited, "edited mesh")->required()->check(CLI::ExistingFile);
 
-  auto* demo = app.add_subcommand(
-      "demo", "a collaborative session in this process: artists sculpt and paint, edits merge");
+  // Session commands register their own options (cli/demo.cpp, cli/peer_command.cpp,
+  // cli/bench_session.cpp).
   csculpt::cli::DemoOptions demo_options;
-  demo->add_option("--artists", demo_options.artists, "simulated artists")
-      ->capture_default_str()
-      ->check(CLI::Range(1u, 32u));
-  demo->add_option("--faces", demo_options.faces, "faces of the built-in sphere")
-      ->capture_default_str()
-      ->check(CLI::Range(20u, 20000000u));
-  demo->add_option("--rounds", demo_options.rounds, "sync rounds (one merge each)")
-      ->capture_default_str()
-      ->check(CLI::Range(1u, 100000u));
-  demo->add_option("--strokes", demo_options.strokes_per_round, "strokes per artist per round")
-      ->capture_default_str()
-      ->check(CLI::Range(1u, 1000u));
-  demo->add_option("--method", demo_options.method, "merge method")->capture_default_str();
-  demo->add_option("-o,--out", demo_options.out,
-                   "final mesh (PLY with materials and attribution colours)")
-      ->capture_default_str();
-  demo->add_option("--seed", demo_options.seed, "stroke seed")->capture_default_str();
+  CLI::App* demo = csculpt::cli::add_demo_command(app, demo_options);
+  csculpt::cli::PeerCommandOptions peer_options;
+  CLI::App* peer = csculpt::cli::add_peer_command(app, peer_options);
 
   auto* scenarios = app.add_subcommand(
       "scenarios",
@@ -234,12 +222,17 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(1u, 10000u));
 
+  csculpt::cli::BenchSessionOptions bench_session_options;
+  CLI::App* bench_session = csculpt::cli::add_bench_session_command(*bench, bench_session_options);
+
   CLI11_PARSE(app, argc, argv);
   try {
     if (*merge) return run_merge(base, edits, out, method, k);
     if (*hierarchy) return run_hierarchy(mesh_path, k);
     if (*diff) return run_diff(base, edited);
     if (*demo) return csculpt::cli::run_demo(demo_options);
+    if (*peer) return csculpt::cli::run_peer(peer_options);
+    if (*bench_session) return csculpt::cli::bench_session(bench_session_options);
     if (*scenarios) return run_scenarios(scenario_faces, scenario_json);
     if (*bench_merge) return csculpt::cli::bench_merge(bo);
     if (*bench_wire) return csculpt::cli::bench_wire(bw);

@@ -1311,14 +1311,13 @@ const Mesh& Session::base() const {
 bool Session::submit(Mesh& local, std::uint32_t strokes) {
   Impl& s = *impl_;
   if (s.left) throw InvalidInput("submit: the session was left");
-  s.unacknowledged_strokes += strokes;
-  s.strokes_submitted += strokes;
   const Diff d = capture_diff(s.base, local);
-  const std::uint64_t dg = digest(d);
   if (d.positions.empty() && std::all_of(d.channels.begin(), d.channels.end(),
                                          [](const auto& c) { return c.change.empty(); }))
     return false;
-  if (dg == s.last_submit_digest) return false;
+  if (digest(d) == s.last_submit_digest) return false;  // nothing new since the last submit
+  s.unacknowledged_strokes += strokes;
+  s.strokes_submitted += strokes;
   DiffHeader header;
   header.base_version = s.version;
   header.sequence = s.next_sequence++;

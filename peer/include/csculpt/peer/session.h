@@ -134,8 +134,9 @@ class Session {
   const Mesh& base() const;
   /// Sends the edit from base() to `local` (same connectivity and channels) to the merger,
   /// replacing what was sent before for this base; `strokes` = strokes made since the last
-  /// submit. The changed values of `local` are set to what the peers receive (within the wire
-  /// tolerance). Returns false when there was nothing new to send. Never waits on the network.
+  /// submit that returned true (they are counted only when something is sent). The changed values
+  /// of `local` are set to what the peers receive (within the wire tolerance). Returns false when
+  /// there was nothing new to send. Never waits on the network.
   bool submit(Mesh& local, std::uint32_t strokes = 0);
   /// Applies every merged version received so far to base() and rebases `local` onto it:
   /// local edits not yet inside a merged version are kept, edits already merged are not

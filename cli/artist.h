@@ -1,0 +1,55 @@
+// A simulated artist in a peer session: scripted strokes at mixed scales (soft brushes as big as
+// half the model, inflates, fine detail, twists, paint) applied at a steady rate to the local
+// mesh, submitted every sync interval, with merged versions rebased in as they arrive. Used by
+// `csculpt peer`, `csculpt demo` and `csculpt bench session`.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <vector>
+
+#include "csculpt/generate.h"
+#include "csculpt/hierarchy.h"
+#include "csculpt/peer/session.h"
+
+namespace csculpt::cli {
+
+struct ArtistOptions {
+  std::uint64_t seed = 1;
+  double strokes_per_second = 4;
+  bool paint = true;
+  /// How often the edit is submitted (the session's sync interval is a good choice).
+  peer::Millis submit_every{250};
+};
+
+class SimulatedArtist {
+ public:
+  /// `session` must outlive the artist; the local mesh starts as the session's base.
+  SimulatedArtist(peer::Session& session, const ArtistOptions& options);
+
+  /// One turn of the host loop at `now`: take merged versions in (rebasing local edits), make
+  /// the strokes that are due if `editing`, and submit when the interval has passed. Returns
+  /// the number of versions applied.
+  std::size_t step(peer::Clock::time_point now, bool editing);
+
+  /// Applies the next scripted stroke now (counted); returns the vertices it changed.
+  std::size_t stroke();
+
+  Mesh& local() { return local_; }
+  std::uint32_t strokes() const { return strokes_; }
+  /// Strokes made but not yet seen inside a merged version.
+  std::uint64_t unacknowledged() const;
+
+ private:
+  peer::Session& session_;
+  ArtistOptions options_;
+  Mesh local_;
+  Topology topology_;
+  std::vector<Stroke> script_;
+  std::uint32_t strokes_ = 0, unsent_strokes_ = 0;
+  std::size_t cursor_ = 0;  ///< next stroke of the script
+  peer::Clock::time_point started_{}, next_submit_{};
+  bool started_flag_ = false;
+};
+
+}  // namespace csculpt::cli
