@@ -423,6 +423,141 @@ typedef struct csc_merge_timings {
 
 CSC_API csc_status csc_merger_last_timings(const csc_merger* merger, csc_merge_timings* out);
 
+/* ---- Sessions: serverless collaboration over ZeroMQ ------------------------------------------
+ *
+ * Several peers edit one mesh; each holds the agreed version and its host's local state. A
+ * session is created on a mesh (that peer holds version 0) or joined with an invite string
+ * (the joiner receives a snapshot of the current version). Every socket is CURVE-encrypted and
+ * authenticated with keys the invite carries: a process without it can neither join nor read.
+ * The live peer with the lowest id merges every sync interval; if it goes, another is elected.
+ * Networking runs on the session's own thread: no call below waits on the network.
+ *
+ * The host loop: csc_session_update() takes merged versions in (the host's arrays are rebased:
+ * local edits not yet merged are kept, merged ones are not applied twice), the artist edits,
+ * csc_session_submit() sends the edit since the agreed version (at least once per sync
+ * interval while there are unmerged edits), csc_session_poll() reports what happened.
+ * A session handle is used from one host thread at a time. */
+
+typedef struct csc_session csc_session;
+
+typedef struct csc_session_options {
+  uint32_t struct_size;
+  const char* bind; /**< ZeroMQ endpoint to listen on; NULL: "tcp://127.0.0.1:*" (free port) */
+  const char* name; /**< shown to others; NULL: "" */
+  uint64_t id;      /**< this peer's id (the lowest live id merges); 0: random */
+  uint32_t sync_ms; /**< merge interval, 50 ms to minutes */
+  uint32_t heartbeat_ms;
+  uint32_t evasive_ms;       /**< silent this long: reported evasive */
+  uint32_t expired_ms;       /**< silent this long: gone (a new merger is elected) */
+  double position_tolerance; /**< wire tolerance, fraction of the bounding-box diagonal */
+  double channel_tolerance;  /**< wire tolerance of channels, stored units */
+  uint32_t join_timeout_ms;  /**< csc_session_join waits this long for the snapshot */
+} csc_session_options;
+#define CSC_SESSION_OPTIONS_INIT \
+  { sizeof(csc_session_options), NULL, NULL, 0, 250, 200, 600, 1200, 1e-5, 1e-4, 30000 }
+
+/** Starts a session on `mesh` (copied; it becomes version 0). `options` may be NULL. Fails with
+ *  CSC_ERROR_IO if the endpoint cannot be bound. */
+CSC_API csc_status csc_session_create(csc_session** out, const csc_mesh* mesh,
+                                      const csc_session_options* options);
+
+/** Joins the session of `invite` and waits for the snapshot (options->join_timeout_ms). Fails
+ *  with CSC_ERROR_INVALID_INPUT for a malformed invite, CSC_ERROR_IO when no snapshot came. */
+CSC_API csc_status csc_session_join(csc_session** out, const char* invite,
+                                    const csc_session_options* options);
+
+/** Tells the others this peer leaves and stops its network thread. Later calls other than
+ *  reads and destroy fail with CSC_ERROR_INVALID_ARGUMENT. */
+CSC_API csc_status csc_session_leave(csc_session* session);
+
+/** Leaves (if not yet) and releases the session. Accepts NULL. */
+CSC_API void csc_session_destroy(csc_session* session);
+
+/** The invite others join with (NUL-terminated, borrowed until destroy); NULL for NULL. */
+CSC_API const char* csc_session_invite(const csc_session* session);
+/** This peer's id; 0 for NULL. */
+CSC_API uint64_t csc_session_id(const csc_session* session);
+/** The agreed version csc_session_update last applied; 0 for NULL. */
+CSC_API uint64_t csc_session_version(const csc_session* session);
+
+/** A copy of the agreed version's mesh (e.g. to fill the host's arrays after joining). */
+CSC_API csc_status csc_session_copy_base(csc_mesh** out, const csc_session* session);
+
+/** Sends the edit from the agreed version to the host's `local` arrays (same layout as the
+ *  session mesh) to the merger, replacing what was sent before for this version; `strokes`
+ *  counts the strokes made since the last submit that sent something. Changed values in
+ *  `local` are set to what the peers receive (within the wire tolerance). `*sent` (may be
+ *  NULL) is 1 if something was sent, 0 if there was nothing new. Copies the arrays once each
+ *  way (O(vertices)). */
+CSC_API csc_status csc_session_submit(csc_session* session, const csc_vertex_arrays* local,
+                                      uint32_t strokes, int32_t* sent);
+
+/** Applies the merged versions received so far and rebases `local` onto them (written in
+ *  place). `*applied` (may be NULL) is the number of versions applied. */
+CSC_API csc_status csc_session_update(csc_session* session, const csc_vertex_arrays* local,
+                                      uint32_t* applied);
+
+typedef enum csc_event_kind {
+  CSC_EVENT_JOINED = 0,         /**< this peer holds the session's mesh */
+  CSC_EVENT_VERSION = 1,        /**< a merged version is ready for csc_session_update */
+  CSC_EVENT_PEER_JOINED = 2,    /**< `peer` joined */
+  CSC_EVENT_PEER_EVASIVE = 3,   /**< `peer` has been silent past the evasive threshold */
+  CSC_EVENT_PEER_LEFT = 4,      /**< `peer` left or expired */
+  CSC_EVENT_MERGER_CHANGED = 5, /**< `peer` merges from `epoch` on */
+  CSC_EVENT_DROPPED = 6,        /**< a malformed or hostile message was dropped (`message`) */
+  CSC_EVENT_ERROR = 7,          /**< the network thread met an error (`message`) */
+  CSC_EVENT_KIND_MAX_ENUM = 0x7FFFFFFF
+} csc_event_kind;
+
+typedef struct csc_session_event {
+  uint32_t struct_size;
+  csc_event_kind kind;
+  uint64_t peer;
+  uint64_t version;
+  uint64_t epoch;
+  const char* message; /**< borrowed until the next csc_session_poll on this session */
+} csc_session_event;
+#define CSC_SESSION_EVENT_INIT \
+  { sizeof(csc_session_event), CSC_EVENT_ERROR, 0, 0, 0, NULL }
+
+/** Takes the next event, if any: `*has_event` is 1 and `event` filled, or 0. Never blocks. */
+CSC_API csc_status csc_session_poll(csc_session* session, csc_session_event* event,
+                                    int32_t* has_event);
+
+typedef struct csc_session_stats {
+  uint32_t struct_size;
+  uint64_t id;
+  uint64_t version; /**< the network thread's agreed version */
+  uint64_t epoch;
+  uint64_t merger; /**< 0 while none is known */
+  uint32_t members;
+  uint64_t submits;
+  uint64_t submit_bytes;
+  uint64_t strokes_submitted;
+  uint64_t strokes_acknowledged; /**< seen inside a merged version */
+  uint64_t versions_applied;
+  uint64_t rebases;
+  uint64_t merges; /**< as the merger */
+  uint64_t merged_strokes;
+  uint64_t conflicting_strokes; /**< a conflict-rejecting system would have refused these */
+  double merge_ms_mean;
+  double merge_ms_max;
+  uint64_t messages_received;
+  uint64_t messages_dropped; /**< malformed, hostile, another session's */
+  uint64_t stale_ignored;    /**< of a stale epoch or not from the merger */
+  uint64_t auth_rejected;    /**< connections without the session key */
+} csc_session_stats;
+#define CSC_SESSION_STATS_INIT \
+  { sizeof(csc_session_stats), 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.0, 0.0, 0, 0, 0, 0 }
+
+CSC_API csc_status csc_session_get_stats(const csc_session* session, csc_session_stats* out);
+
+/** Attribution as vertex colours: 3 floats per vertex into `rgb` (vertex_count must be the
+ *  mesh's): peers get green, blue, red, ... by increasing id, mixed where several edited,
+ *  light grey where nobody did (the paper's Fig. 1/6). */
+CSC_API csc_status csc_session_attribution_colors(const csc_session* session, float* rgb,
+                                                  uint32_t vertex_count);
+
 #ifdef __cplusplus
 } /* extern "C" */
 #endif

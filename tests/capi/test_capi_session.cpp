@@ -1,0 +1,196 @@
+// Sessions through the C ABI only (as a DCC host sees them): two peers on loopback, edits in
+// host arrays, convergence, events, statistics, attribution, and bad arguments.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "csculpt.h"
+
+namespace {
+
+/// A host: its own arrays, described to the library by csc_vertex_arrays.
+struct Host {
+  std::vector<float> positions;
+  std::vector<std::vector<float>> channels;
+  std::vector<float*> channel_pointers;
+  csc_vertex_arrays arrays = CSC_VERTEX_ARRAYS_INIT;
+
+  explicit Host(const csc_mesh* mesh) {
+    const std::uint32_t n = csc_mesh_vertex_count(mesh);
+    positions.assign(csc_mesh_positions(mesh), csc_mesh_positions(mesh) + 3 * n);
+    for (std::uint32_t c = 0; c < csc_mesh_channel_count(mesh); ++c) {
+      csc_channel_view view = CSC_CHANNEL_VIEW_INIT;
+      EXPECT_EQ(csc_mesh_channel(mesh, c, &view), CSC_OK);
+      channels.emplace_back(view.values, view.values + std::size_t{n} * view.desc.width);
+    }
+    for (auto& c : channels) channel_pointers.push_back(c.data());
+    arrays.vertex_count = n;
+    arrays.positions = positions.data();
+    arrays.channel_count = static_cast<std::uint32_t>(channels.size());
+    arrays.channels = channel_pointers.data();
+  }
+};
+
+csc_mesh* grid(int n) {
+  std::vector<float> p;
+  std::vector<std::uint32_t> t;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      p.push_back(float(i) / float(n - 1));
+      p.push_back(float(j) / float(n - 1));
+      p.push_back(0.05f * std::sin(float(i + 2 * j)));
+    }
+  for (int j = 0; j + 1 < n; ++j)
+    for (int i = 0; i + 1 < n; ++i) {
+      const auto v = static_cast<std::uint32_t>(j * n + i), w = static_cast<std::uint32_t>(n);
+      t.insert(t.end(), {v, v + 1, v + w, v + 1, v + w + 1, v + w});
+    }
+  csc_mesh_desc d = CSC_MESH_DESC_INIT;
+  d.vertex_count = static_cast<std::uint32_t>(p.size() / 3);
+  d.positions = p.data();
+  d.triangle_count = static_cast<std::uint32_t>(t.size() / 3);
+  d.triangles = t.data();
+  csc_mesh* m = nullptr;
+  EXPECT_EQ(csc_mesh_create(&m, &d), CSC_OK) << csc_last_error();
+  EXPECT_EQ(csc_mesh_add_material_channels(m), CSC_OK);
+  return m;
+}
+
+csc_session_options fast(std::uint64_t id) {
+  csc_session_options o = CSC_SESSION_OPTIONS_INIT;
+  o.id = id;
+  o.sync_ms = 30;
+  o.heartbeat_ms = 50;
+  o.evasive_ms = 200;
+  o.expired_ms = 400;
+  o.join_timeout_ms = 10000;
+  return o;
+}
+
+TEST(CapiSession, TwoHostsEditTheirArraysAndConverge) {
+  csc_mesh* mesh = grid(48);
+  csc_session* a = nullptr;
+  const csc_session_options oa = fast(1), ob = fast(2);
+  ASSERT_EQ(csc_session_create(&a, mesh, &oa), CSC_OK) << csc_last_error();
+  const std::string invite = csc_session_invite(a);
+  EXPECT_EQ(invite.rfind("csculpt1:", 0), 0u);
+  csc_session* b = nullptr;
+  ASSERT_EQ(csc_session_join(&b, invite.c_str(), &ob), CSC_OK) << csc_last_error();
+  EXPECT_EQ(csc_session_id(b), 2u);
+
+  csc_mesh* b_base = nullptr;
+  ASSERT_EQ(csc_session_copy_base(&b_base, b), CSC_OK);
+  Host ha(mesh), hb(b_base);
+  ASSERT_EQ(ha.positions, hb.positions);
+  // a lifts the left half, b paints the right half red
+  for (std::size_t v = 0; v < ha.positions.size() / 3; ++v) {
+    if (ha.positions[3 * v] < 0.4f) ha.positions[3 * v + 2] += 0.1f * ha.positions[3 * v];
+    if (hb.positions[3 * v] > 0.6f) hb.channels[0][3 * v] = 1.f;  // albedo red
+  }
+  int32_t sent = 0;
+  ASSERT_EQ(csc_session_submit(a, &ha.arrays, 1, &sent), CSC_OK) << csc_last_error();
+  EXPECT_EQ(sent, 1);
+  ASSERT_EQ(csc_session_submit(b, &hb.arrays, 1, &sent), CSC_OK);
+  EXPECT_EQ(sent, 1);
+  ASSERT_EQ(csc_session_submit(b, &hb.arrays, 0, &sent), CSC_OK);
+  EXPECT_EQ(sent, 0);  // nothing new
+
+  bool joined_event = false, version_event = false;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  for (;;) {
+    ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "no convergence";
+    std::uint32_t applied = 0;
+    ASSERT_EQ(csc_session_update(a, &ha.arrays, &applied), CSC_OK) << csc_last_error();
+    ASSERT_EQ(csc_session_update(b, &hb.arrays, &applied), CSC_OK) << csc_last_error();
+    csc_session_event e = CSC_SESSION_EVENT_INIT;
+    int32_t has = 0;
+    while (csc_session_poll(a, &e, &has) == CSC_OK && has) {
+      joined_event |= e.kind == CSC_EVENT_JOINED;
+      version_event |= e.kind == CSC_EVENT_VERSION;
+      ASSERT_NE(e.message, nullptr);
+    }
+    csc_session_stats sa = CSC_SESSION_STATS_INIT, sb = CSC_SESSION_STATS_INIT;
+    ASSERT_EQ(csc_session_get_stats(a, &sa), CSC_OK);
+    ASSERT_EQ(csc_session_get_stats(b, &sb), CSC_OK);
+    if (sa.strokes_acknowledged == 1 && sb.strokes_acknowledged == 1 &&
+        csc_session_version(a) == csc_session_version(b) && ha.positions == hb.positions &&
+        ha.channels == hb.channels)
+      break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  EXPECT_TRUE(joined_event);
+  EXPECT_TRUE(version_event);
+  // both edits arrived on both hosts
+  float lift = 0, red = 0;
+  for (std::size_t v = 0; v < ha.positions.size() / 3; ++v) {
+    lift = std::max(lift, hb.positions[3 * v + 2] - csc_mesh_positions(mesh)[3 * v + 2]);
+    red = std::max(red, ha.channels[0][3 * v]);
+  }
+  EXPECT_GT(lift, 0.02f);
+  EXPECT_GT(red, 0.9f);
+  std::vector<float> rgb(3 * ha.arrays.vertex_count);
+  EXPECT_EQ(csc_session_attribution_colors(a, rgb.data(), ha.arrays.vertex_count), CSC_OK);
+  EXPECT_NE(rgb.front(), rgb.back());  // left and right halves attributed to different peers
+  EXPECT_EQ(csc_session_attribution_colors(a, rgb.data(), 3), CSC_ERROR_INVALID_ARGUMENT);
+
+  EXPECT_EQ(csc_session_leave(b), CSC_OK);
+  EXPECT_EQ(csc_session_submit(b, &hb.arrays, 0, nullptr), CSC_ERROR_INVALID_ARGUMENT);
+  csc_session_destroy(b);
+  csc_session_destroy(a);
+  csc_mesh_destroy(b_base);
+  csc_mesh_destroy(mesh);
+}
+
+TEST(CapiSession, BadArgumentsAndInvitesAreRefusedClearly) {
+  csc_mesh* mesh = grid(8);
+  csc_session* s = nullptr;
+  EXPECT_EQ(csc_session_create(nullptr, mesh, nullptr), CSC_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(csc_session_create(&s, nullptr, nullptr), CSC_ERROR_INVALID_ARGUMENT);
+  csc_session_options o = CSC_SESSION_OPTIONS_INIT;
+  o.expired_ms = o.evasive_ms;
+  EXPECT_EQ(csc_session_create(&s, mesh, &o), CSC_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(std::string(csc_last_error()).find("evasive_ms"), std::string::npos);
+  o = CSC_SESSION_OPTIONS_INIT;
+  o.bind = "tcp://256.1.1.1:1";
+  EXPECT_EQ(csc_session_create(&s, mesh, &o), CSC_ERROR_IO);
+  EXPECT_NE(std::string(csc_last_error()).find("256.1.1.1"), std::string::npos);
+  EXPECT_EQ(s, nullptr);
+  EXPECT_EQ(csc_session_join(&s, "not an invite", nullptr), CSC_ERROR_INVALID_INPUT);
+  EXPECT_NE(std::string(csc_last_error()).find("csculpt1:"), std::string::npos);
+  // A well-formed invite to nobody: no snapshot within the timeout.
+  const std::string nobody = "csculpt1:" + std::string(144, '0') + "@tcp://127.0.0.1:9";
+  o = CSC_SESSION_OPTIONS_INIT;
+  o.join_timeout_ms = 300;
+  EXPECT_EQ(csc_session_join(&s, nobody.c_str(), &o), CSC_ERROR_IO);
+  EXPECT_EQ(s, nullptr);
+  // foreign handles and NULLs
+  auto* foreign = reinterpret_cast<csc_session*>(mesh);
+  int32_t has = 0;
+  csc_session_event e = CSC_SESSION_EVENT_INIT;
+  EXPECT_EQ(csc_session_poll(foreign, &e, &has), CSC_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(csc_session_leave(foreign), CSC_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(csc_session_invite(foreign), nullptr);
+  EXPECT_EQ(csc_session_id(nullptr), 0u);
+  csc_session_destroy(nullptr);
+  csc_session_destroy(foreign);  // ignored
+  ASSERT_EQ(csc_session_create(&s, mesh, nullptr), CSC_OK) << csc_last_error();
+  EXPECT_EQ(csc_session_poll(s, nullptr, &has), CSC_ERROR_INVALID_ARGUMENT);
+  e.struct_size = 4;
+  EXPECT_EQ(csc_session_poll(s, &e, &has), CSC_ERROR_INVALID_ARGUMENT);
+  Host h(mesh);
+  h.arrays.vertex_count -= 1;
+  EXPECT_EQ(csc_session_submit(s, &h.arrays, 1, nullptr), CSC_ERROR_INVALID_INPUT);
+  h.arrays.vertex_count += 1;
+  h.positions[4] = std::nanf("");
+  EXPECT_EQ(csc_session_submit(s, &h.arrays, 1, nullptr), CSC_ERROR_INVALID_INPUT);
+  EXPECT_TRUE(std::isnan(h.positions[4]));  // nothing written back on failure
+  csc_session_destroy(s);
+  csc_mesh_destroy(mesh);
+}
+
+}  // namespace
