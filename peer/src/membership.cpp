@@ -95,19 +95,30 @@ Election::Decision Election::update(const Membership& membership) {
   return d;
 }
 
-bool Election::on_announcement(std::uint64_t epoch, PeerId merger, const Membership& membership) {
-  if (epoch < epoch_) return false;
-  if (epoch == epoch_ && merger_ && *merger_ <= merger) return false;
-  // A claimant we know to be dead (expired, not a member) is not followed.
-  if (!membership.contains(merger)) return false;
+Election::Outcome Election::on_announcement(std::uint64_t epoch, PeerId claimant,
+                                            const Membership& membership) {
+  Outcome o;
+  // A claimant we do not know, or know to be dead, is not followed (forged or stale).
+  if (!membership.contains(claimant)) return o;
+  if (merger_ == claimant) {
+    epoch_ = std::max(epoch_, epoch);
+    return o;
+  }
+  const bool merger_alive = merger_ && membership.contains(*merger_);
+  if (merger_alive && *merger_ < claimant) {
+    // The rule says our merger, not the claimant. If that is us, tell everyone again with an
+    // epoch past the claim, so the claimant and its followers come back.
+    if (is_merger() && epoch >= epoch_) {
+      epoch_ = epoch + 1;
+      o.reassert = true;
+    }
+    return o;
+  }
+  if (epoch < epoch_) return o;
   epoch_ = epoch;
-  merger_ = merger;
-  return true;
-}
-
-void Election::adopt(std::uint64_t epoch, PeerId merger) {
-  epoch_ = epoch;
-  merger_ = merger;
+  merger_ = claimant;
+  o.followed = true;
+  return o;
 }
 
 }  // namespace csculpt::peer

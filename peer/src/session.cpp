@@ -463,12 +463,23 @@ class Node {
     s.set(zmq::sockopt::curve_secretkey, zmq::const_buffer(invite_.client_secret.data(), 32));
     s.set(zmq::sockopt::linger, 0);
     s.set(zmq::sockopt::sndhwm, 10000);
+    // The receiver checks every envelope's sender against this: a member cannot speak for
+    // another (ROUTER refuses a second connection with a routing id already in use).
+    const std::array<std::uint8_t, 9> rid = routing_id(self_);
+    s.set(zmq::sockopt::routing_id, zmq::const_buffer(rid.data(), rid.size()));
     s.set(zmq::sockopt::maxmsgsize, static_cast<std::int64_t>(options_.max_message_bytes));
     s.connect(endpoint);
     return dealers_.emplace(endpoint, std::move(s)).first->second;
   }
 
   void disconnect(const std::string& endpoint) { dealers_.erase(endpoint); }
+
+  /// 'P' and the id's 8 bytes (a routing id may not start with a zero byte).
+  static std::array<std::uint8_t, 9> routing_id(PeerId id) {
+    std::array<std::uint8_t, 9> r{'P'};
+    for (int i = 0; i < 8; ++i) r[1 + i] = static_cast<std::uint8_t>(id >> (8 * i));
+    return r;
+  }
 
   template <class Fill>
   std::vector<std::uint8_t> envelope(fb::Body type, Fill&& fill) {
@@ -546,7 +557,7 @@ class Node {
           zmq::message_t extra;
           if (!router_.recv(extra, zmq::recv_flags::dontwait)) break;
         }
-        handle(payload, now);
+        handle(routing, payload, now);
       }
       std::deque<Command> commands;
       {
@@ -604,7 +615,7 @@ class Node {
   }
 
   // ---- inbound -------------------------------------------------------------------------------
-  void handle(const zmq::message_t& payload, Clock::time_point now) {
+  void handle(const zmq::message_t& routing, const zmq::message_t& payload, Clock::time_point now) {
     {
       std::lock_guard lock(mutex_);
       ++stats_.messages_received;
@@ -619,7 +630,10 @@ class Node {
     const fb::Envelope* env = fb::GetEnvelope(data);
     if (env->session() != invite_.session) return dropped("message of another session");
     const PeerId sender = env->sender();
-    if (sender == self_ || sender == 0) return dropped("message with a forged sender id");
+    const std::array<std::uint8_t, 9> rid = routing_id(sender);
+    if (sender == self_ || sender == 0 || routing.size() != rid.size() ||
+        std::memcmp(routing.data(), rid.data(), rid.size()) != 0)
+      return dropped("message whose sender id does not match its connection");
     try {
       switch (env->body_type()) {
         case fb::Body::Hello:
@@ -746,7 +760,14 @@ class Node {
   }
 
   void on_elected(const fb::Envelope& env, PeerId merger) {
-    if (election_.on_announcement(env.epoch(), merger, membership_)) merger_changed();
+    const Election::Outcome o = election_.on_announcement(env.epoch(), merger, membership_);
+    if (o.followed) merger_changed();
+    if (o.reassert) announce();
+  }
+
+  void announce() {
+    broadcast(
+        envelope(fb::Body::Elected, [&](auto& b) { return fb::CreateElected(b, self_).Union(); }));
   }
 
   void merger_changed() {
@@ -800,9 +821,7 @@ class Node {
         ++stats_.stale_ignored;
         return;
       }
-      if (env.epoch() > election_.epoch() &&
-          election_.on_announcement(env.epoch(), env.sender(), membership_))
-        merger_changed();
+      if (env.epoch() > election_.epoch()) on_elected(env, env.sender());
       if (election_.merger() != env.sender()) {
         std::lock_guard lock(mutex_);
         ++stats_.stale_ignored;

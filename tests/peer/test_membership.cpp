@@ -47,7 +47,7 @@ TEST(Election, LowestLivePeerMergesAndAnnouncesANewEpoch) {
   auto d = e.update(m);
   EXPECT_FALSE(d.announce);  // 3 is lower: wait for its announcement
   EXPECT_FALSE(e.merger());
-  EXPECT_TRUE(e.on_announcement(1, 3, m));
+  EXPECT_TRUE(e.on_announcement(1, 3, m).followed);
   EXPECT_EQ(e.merger(), PeerId{3});
   EXPECT_EQ(e.epoch(), 1u);
   // 3 dies: 5 is now the lowest live id and starts epoch 2
@@ -60,7 +60,7 @@ TEST(Election, LowestLivePeerMergesAndAnnouncesANewEpoch) {
   EXPECT_EQ(e.epoch(), 2u);
   // messages of epoch 1 are stale now; a late announcement of epoch 1 changes nothing
   EXPECT_TRUE(e.is_stale(1));
-  EXPECT_FALSE(e.on_announcement(1, 3, m));
+  EXPECT_FALSE(e.on_announcement(1, 3, m).followed);
   EXPECT_TRUE(e.is_merger());
 }
 
@@ -73,8 +73,12 @@ TEST(Election, TwoClaimsOfOneEpochSettleOnTheLowerId) {
   ma.heard(6, "b", t0);
   mb.heard(4, "a", t0);
   ASSERT_TRUE(a.update(ma).announce);
-  EXPECT_FALSE(a.on_announcement(1, 6, ma));  // a keeps its own claim
-  EXPECT_TRUE(b.on_announcement(1, 4, mb));   // b yields to the lower id
+  const auto oa = a.on_announcement(1, 6, ma);  // a keeps its own claim and re-asserts it
+  EXPECT_FALSE(oa.followed);
+  EXPECT_TRUE(oa.reassert);
+  EXPECT_EQ(a.epoch(), 2u);
+  EXPECT_TRUE(b.on_announcement(1, 4, mb).followed);   // b yields to the lower id
+  EXPECT_FALSE(b.on_announcement(2, 4, mb).followed);  // the re-assertion: same merger
   EXPECT_EQ(a.merger(), b.merger());
   EXPECT_EQ(a.epoch(), b.epoch());
 }
@@ -82,8 +86,31 @@ TEST(Election, TwoClaimsOfOneEpochSettleOnTheLowerId) {
 TEST(Election, AClaimantThatIsNotAMemberIsNotFollowed) {
   Membership m(5, "a", thresholds());
   Election e(5);
-  EXPECT_FALSE(e.on_announcement(3, 99, m));  // forged or long dead
+  EXPECT_FALSE(e.on_announcement(3, 99, m).followed);  // forged or long dead
   EXPECT_FALSE(e.merger());
+}
+
+TEST(Election, AForgedHigherEpochFromAHigherIdDoesNotDisplaceALiveMerger) {
+  const Clock::time_point t0{};
+  Membership m(5, "a", thresholds());
+  m.heard(3, "b", t0);
+  m.heard(8, "c", t0);
+  Election e(5);
+  ASSERT_TRUE(e.on_announcement(1, 3, m).followed);
+  const auto o = e.on_announcement(999, 8, m);
+  EXPECT_FALSE(o.followed);
+  EXPECT_FALSE(o.reassert);  // not ours to re-assert: 3 merges
+  EXPECT_EQ(e.merger(), PeerId{3});
+  EXPECT_EQ(e.epoch(), 1u);
+  // The merger itself, hearing the forged claim, re-asserts past it.
+  Membership m3(3, "b", thresholds());
+  m3.heard(8, "c", t0);
+  Election e3(3);
+  ASSERT_TRUE(e3.update(m3).announce);
+  const auto r = e3.on_announcement(999, 8, m3);
+  EXPECT_TRUE(r.reassert);
+  EXPECT_EQ(e3.epoch(), 1000u);
+  EXPECT_TRUE(e3.is_merger());
 }
 
 }  // namespace

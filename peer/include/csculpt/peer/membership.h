@@ -71,10 +71,12 @@ class Membership {
 
 /// One merger per epoch (Raft's one leader per term), chosen by a deterministic rule among
 /// live peers: the lowest id. A peer that finds the merger gone and itself the lowest live id
-/// starts epoch + 1 and announces it; others follow an announcement of a higher epoch (or of
-/// the same epoch from a lower id, which settles two peers that started the same epoch with
-/// different views). Work of a stale epoch is ignored, so two mergers never both publish a
-/// version a peer accepts.
+/// starts epoch + 1 and announces it. Announcements (and versions) of a stale epoch are
+/// ignored, so two mergers never both publish a version a peer accepts. A claim is followed only
+/// if it agrees with the rule as this peer sees it: a higher id never displaces a live merger
+/// with a lower id, whatever epoch it claims (a forged epoch gains nothing); when the rightful
+/// merger hears such a claim it re-asserts itself with a higher epoch, which also reunites
+/// peers whose views of who is alive differed for a while.
 class Election {
  public:
   explicit Election(PeerId self) : self_(self) {}
@@ -86,8 +88,12 @@ class Election {
   };
   Decision update(const Membership& membership);
 
-  /// An announcement from `merger` for `epoch`. Returns true if we now follow it.
-  bool on_announcement(std::uint64_t epoch, PeerId merger, const Membership& membership);
+  struct Outcome {
+    bool followed = false;  ///< the claimant is our merger now (it changed)
+    bool reassert = false;  ///< we are the rightful merger: announce epoch() again
+  };
+  /// A claim by `claimant` to merge `epoch`.
+  Outcome on_announcement(std::uint64_t epoch, PeerId claimant, const Membership& membership);
 
   /// Whether a message of `epoch` about merging (versions, elections) is stale.
   bool is_stale(std::uint64_t epoch) const { return epoch < epoch_; }
@@ -95,8 +101,6 @@ class Election {
   std::uint64_t epoch() const { return epoch_; }
   std::optional<PeerId> merger() const { return merger_; }
   bool is_merger() const { return merger_ == self_; }
-  /// Adopts a known state (a joiner learns it from the session).
-  void adopt(std::uint64_t epoch, PeerId merger);
 
  private:
   PeerId self_;
