@@ -628,6 +628,8 @@ CSC_API void csc_bytes_destroy(csc_bytes* bytes) {
   destroy(bytes, Tag::bytes);
 }
 
+}  // extern "C"
+
 namespace {
 std::span<const std::uint8_t> byte_span(const void* data, std::size_t size) {
   if (data == nullptr && size > 0) bad_argument("data is NULL");
@@ -644,6 +646,8 @@ csc_message_info message_info(const csculpt::DiffHeader& h, const char* author) 
   return v;
 }
 }  // namespace
+
+extern "C" {
 
 CSC_API csc_status csc_diff_peek(const void* data, size_t size, csc_message_info* info) {
   return guarded("csc_diff_peek", [&] {
@@ -679,6 +683,8 @@ CSC_API csc_status csc_diff_decode(csc_diff** out, const csc_mesh* base, uint64_
 
 // ---- Merge -------------------------------------------------------------------------------
 
+}  // extern "C"
+
 namespace {
 struct MethodName {
   csc_merge_method method;
@@ -700,6 +706,8 @@ const MethodName* find_method(csc_merge_method m) {
   return nullptr;
 }
 }  // namespace
+
+extern "C" {
 
 CSC_API const char* csc_merge_method_name(csc_merge_method method) {
   const MethodName* m = find_method(method);
@@ -785,6 +793,8 @@ CSC_API csc_status csc_merger_last_timings(const csc_merger* merger, csc_merge_t
 
 // ---- Sessions ------------------------------------------------------------------------------
 
+}  // extern "C"
+
 namespace {
 
 csculpt::peer::SessionOptions session_options(const csc_session_options* in) {
@@ -845,6 +855,8 @@ void copy_out(const csculpt::Mesh& m, const csc_vertex_arrays& a) {
 }
 
 }  // namespace
+
+extern "C" {
 
 CSC_API csc_status csc_session_create(csc_session** out, const csc_mesh* mesh,
                                       const csc_session_options* options) {

@@ -117,7 +117,7 @@ EncodedAttribute encode_attribute(const AttributeDiff& change, const float* base
     encode_indices(change.indices, e.index_gaps);
     e.values.resize(change.values.size() * sizeof(float));
     static_assert(std::endian::native == std::endian::little, "wire floats are little-endian");
-    std::memcpy(e.values.data(), change.values.data(), e.values.size());
+    if (!e.values.empty()) std::memcpy(e.values.data(), change.values.data(), e.values.size());
     return e;
   }
   e.count = static_cast<std::uint32_t>(kept.size());
@@ -165,10 +165,12 @@ const fb::DiffMessage* verified_message(std::span<const std::uint8_t> bytes,
   if (!fb::DiffMessageBufferHasIdentifier(bytes.data()))
     throw InvalidInput("not a cSculpt diff message (file identifier is not \"" +
                        std::string(fb::DiffMessageIdentifier()) + "\")");
-  // Explicit limits: depth 8 is more than the schema nests; the table count bounds the
-  // channels; the size bound is the buffer itself.
-  flatbuffers::Verifier verifier(bytes.data(), bytes.size(), /*max_depth=*/8,
-                                 /*max_tables=*/limits.max_channels * 2 + 8);
+  // Explicit limits: depth 8 is more than the schema nests; the size bound is the buffer
+  // itself; the table count is bounded by what the channel limit could need (checked with
+  // its own message once verified) with room to spare.
+  flatbuffers::Verifier verifier(
+      bytes.data(), bytes.size(), /*max_depth=*/8,
+      /*max_tables=*/std::max<flatbuffers::uoffset_t>(1024, limits.max_channels * 4 + 16));
   if (!fb::VerifyDiffMessageBuffer(verifier))
     throw InvalidInput("diff message failed FlatBuffers verification (corrupt or truncated)");
   return fb::GetDiffMessage(bytes.data());
@@ -212,10 +214,14 @@ void decode_attribute(const fb::AttributeChanges* a, const float* base, std::uin
     VarintReader r(gaps->data(), gaps->size(), what + " indices");
     std::uint64_t next = 0;
     for (std::uint32_t i = 0; i < count; ++i) {
-      const std::uint64_t index = next + r.next();
-      if (index >= vertex_count)
-        throw InvalidInput(what + ": vertex index " + std::to_string(index) + " out of range (" +
-                           std::to_string(vertex_count) + " vertices)");
+      // Checked before adding: a hostile gap near 2^64 would wrap around to a small index.
+      const std::uint64_t gap = r.next();
+      if (gap >= vertex_count - next)
+        throw InvalidInput(
+            what + ": vertex index " +
+            (gap > std::uint64_t{1} << 32 ? std::string("past 2^32") : std::to_string(next + gap)) +
+            " out of range (" + std::to_string(vertex_count) + " vertices)");
+      const std::uint64_t index = next + gap;
       out.indices[i] = static_cast<std::uint32_t>(index);
       next = index + 1;
     }
@@ -248,7 +254,7 @@ void decode_attribute(const fb::AttributeChanges* a, const float* base, std::uin
         throw InvalidInput(what + ": " + std::to_string(n) + " values in " + std::to_string(bytes) +
                            " bytes");
       const bool predicted = a->coding() == fb::ValueCoding::QuantisedDeltaPredicted;
-      VarintReader r(n ? values->data() : nullptr, bytes, what + " values");
+      VarintReader r(values ? values->data() : nullptr, bytes, what + " values");
       for (std::uint32_t c = 0; c < width; ++c) {
         std::int64_t q = 0;
         for (std::uint32_t i = 0; i < count; ++i) {
@@ -335,7 +341,11 @@ Diff decode_diff(std::span<const std::uint8_t> bytes, const Mesh& base, DiffHead
   d.channels.resize(base.channels.size());
   for (std::size_t c = 0; c < base.channels.size(); ++c) d.channels[c].desc = base.channels[c].desc;
   if (const auto* channels = m.channels()) {
-    if (channels->size() > limits.max_channels || channels->size() > base.channels.size())
+    if (channels->size() > limits.max_channels)
+      throw InvalidInput("diff message has " + std::to_string(channels->size()) +
+                         " channels, more than the limit of " +
+                         std::to_string(limits.max_channels));
+    if (channels->size() > base.channels.size())
       throw InvalidInput("diff message has " + std::to_string(channels->size()) +
                          " channels; the base mesh has " + std::to_string(base.channels.size()));
     std::vector<bool> seen(base.channels.size(), false);
