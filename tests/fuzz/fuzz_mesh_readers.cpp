@@ -2,10 +2,11 @@
 // STL), the rest is the file. Readers may only reject input with csculpt::InvalidInput; any
 // other exception, crash, sanitizer report, leak or runaway allocation is a bug.
 //
-// Build (not part of the CMake build):
-//   clang++ -std=c++20 -g -O1 -fsanitize=fuzzer,address,undefined -I sdk/include \
-//     tests/fuzz/fuzz_mesh_readers.cpp sdk/src/mesh.cpp sdk/src/io*.cpp -o fuzz_mesh_readers
-//   ./fuzz_mesh_readers -max_len=4096 -rss_limit_mb=1024 tests/fuzz/corpus/mesh
+// Built and run for 20 s by the CTest test `fuzz` (tests/fuzz/run_fuzz.sh, fuzz.mk). A longer
+// run, from the repository root after one `ctest -L fuzz` (which builds the binary):
+//   cp -r tests/fuzz/corpus/mesh /tmp/mesh-corpus
+//   build/tests/fuzz/work/fuzz_mesh_readers -max_total_time=300 -timeout=10 -max_len=4096 \
+//     -rss_limit_mb=1024 -artifact_prefix=/tmp/ /tmp/mesh-corpus
 #include <cstddef>
 #include <cstdint>
 #include <string_view>
