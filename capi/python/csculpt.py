@@ -10,6 +10,13 @@ function's prototype, every struct and enum) and adds a thin Pythonic layer:
         merged = csculpt.Merger(h).merge(base, [a, b])
         merged.apply_to_arrays(base, positions=scene_positions)   # in place
 
+Sessions (serverless collaboration over ZeroMQ) work on the host's arrays in place too:
+
+    with csculpt.Session.create(base, name="ana") as s:      # others: Session.join(invite)
+        s.update(positions, channels)     # merged versions in, local edits rebased
+        s.submit(positions, channels, strokes=1)
+        for event in s.events(): ...
+
 Finding the library: $CSCULPT_LIBRARY (a full path; nothing else is tried when it is set),
 else libcsculpt.so.0 beside this file, in ../../build/capi (the source tree's build), in the
 install prefix's lib directories (this file installs to <prefix>/share/csculpt/python), else
@@ -47,7 +54,8 @@ __all__ = [
     "EXPECTED_VERSION", "Status", "Linearisation", "MergeMethod", "CsculptError",
     "InvalidArgument", "InvalidInput", "IoError", "UnknownBaseVersion", "OutOfMemory",
     "InternalError", "Mesh", "Channel", "Hierarchy", "HierarchyStats", "Diff", "DiffInfo",
-    "MessageInfo", "Tolerances", "LOSSLESS", "Merger", "MergeTimings", "peek", "version",
+    "MessageInfo", "Tolerances", "LOSSLESS", "Merger", "MergeTimings", "EventKind", "Session",
+    "SessionEvent", "SessionStats", "SESSION_OPTIONS", "peek", "version",
     "version_string", "wire_protocol_version", "merge_method_names", "check_version",
     "library_path"
 ]
@@ -89,6 +97,18 @@ class MergeMethod(enum.IntEnum):
     METHOD_MAX_ENUM = 0x7FFFFFFF
 
 
+class EventKind(enum.IntEnum):
+    JOINED = 0
+    VERSION = 1
+    PEER_JOINED = 2
+    PEER_EVASIVE = 3
+    PEER_LEFT = 4
+    MERGER_CHANGED = 5
+    DROPPED = 6
+    ERROR = 7
+    KIND_MAX_ENUM = 0x7FFFFFFF
+
+
 # ---- Structs (mirrors of the header's, named as in C) --------------------------------------
 
 # Opaque handle types: distinct pointer types let ctypes refuse a handle of the wrong kind.
@@ -109,6 +129,10 @@ class csc_merger(ctypes.Structure):
 
 
 class csc_bytes(ctypes.Structure):
+    pass
+
+
+class csc_session(ctypes.Structure):
     pass
 
 
@@ -190,6 +214,35 @@ class csc_merge_timings(_Sized):
                 ("blend_ms", c_double), ("apply_ms", c_double)]
 
 
+class csc_session_options(_Sized):
+    _fields_ = [("struct_size", c_uint32), ("bind", c_char_p), ("name", c_char_p),
+                ("id", c_uint64), ("sync_ms", c_uint32), ("heartbeat_ms", c_uint32),
+                ("evasive_ms", c_uint32), ("expired_ms", c_uint32),
+                ("position_tolerance", c_double), ("channel_tolerance", c_double),
+                ("join_timeout_ms", c_uint32)]
+    _defaults_ = {"sync_ms": 250, "heartbeat_ms": 200, "evasive_ms": 600, "expired_ms": 1200,
+                  "position_tolerance": 1e-5, "channel_tolerance": 1e-4,
+                  "join_timeout_ms": 30000}
+
+
+class csc_session_event(_Sized):
+    _fields_ = [("struct_size", c_uint32), ("kind", _c_enum), ("peer", c_uint64),
+                ("version", c_uint64), ("epoch", c_uint64), ("message", c_char_p)]
+    _defaults_ = {"kind": 7}  # CSC_EVENT_ERROR, as CSC_SESSION_EVENT_INIT
+
+
+class csc_session_stats(_Sized):
+    _fields_ = [("struct_size", c_uint32), ("id", c_uint64), ("version", c_uint64),
+                ("epoch", c_uint64), ("merger", c_uint64), ("members", c_uint32),
+                ("submits", c_uint64), ("submit_bytes", c_uint64),
+                ("strokes_submitted", c_uint64), ("strokes_acknowledged", c_uint64),
+                ("versions_applied", c_uint64), ("rebases", c_uint64), ("merges", c_uint64),
+                ("merged_strokes", c_uint64), ("conflicting_strokes", c_uint64),
+                ("merge_ms_mean", c_double), ("merge_ms_max", c_double),
+                ("messages_received", c_uint64), ("messages_dropped", c_uint64),
+                ("stale_ignored", c_uint64), ("auth_rejected", c_uint64)]
+
+
 # ---- Errors --------------------------------------------------------------------------------
 
 
@@ -245,6 +298,7 @@ _HierarchyP = POINTER(csc_hierarchy)
 _DiffP = POINTER(csc_diff)
 _MergerP = POINTER(csc_merger)
 _BytesP = POINTER(csc_bytes)
+_SessionP = POINTER(csc_session)
 _FloatP = POINTER(c_float)
 _U32P = POINTER(c_uint32)
 _STATUS = object()  # marks functions returning csc_status: they get an errcheck that raises
@@ -299,6 +353,21 @@ PROTOTYPES = {
     "csc_merger_merge": (_STATUS, [_MergerP, POINTER(_DiffP), _MeshP, POINTER(_DiffP), c_uint32,
                                    POINTER(csc_merge_options)]),
     "csc_merger_last_timings": (_STATUS, [_MergerP, POINTER(csc_merge_timings)]),
+    "csc_session_create": (_STATUS, [POINTER(_SessionP), _MeshP,
+                                     POINTER(csc_session_options)]),
+    "csc_session_join": (_STATUS, [POINTER(_SessionP), c_char_p, POINTER(csc_session_options)]),
+    "csc_session_leave": (_STATUS, [_SessionP]),
+    "csc_session_destroy": (None, [_SessionP]),
+    "csc_session_invite": (c_char_p, [_SessionP]),
+    "csc_session_id": (c_uint64, [_SessionP]),
+    "csc_session_version": (c_uint64, [_SessionP]),
+    "csc_session_copy_base": (_STATUS, [POINTER(_MeshP), _SessionP]),
+    "csc_session_submit": (_STATUS, [_SessionP, POINTER(csc_vertex_arrays), c_uint32,
+                                     POINTER(c_int32)]),
+    "csc_session_update": (_STATUS, [_SessionP, POINTER(csc_vertex_arrays), _U32P]),
+    "csc_session_poll": (_STATUS, [_SessionP, POINTER(csc_session_event), POINTER(c_int32)]),
+    "csc_session_get_stats": (_STATUS, [_SessionP, POINTER(csc_session_stats)]),
+    "csc_session_attribution_colors": (_STATUS, [_SessionP, _FloatP, c_uint32]),
 }
 
 # ---- Loading -------------------------------------------------------------------------------
@@ -754,51 +823,58 @@ class Mesh(_Handle):
 
     def _vertex_arrays(self, positions, channels, target: bool) -> Tuple[csc_vertex_arrays, list]:
         """csc_vertex_arrays over the host's arrays (in place), with the arrays to keep alive
-        during the call. channels: {name: array} or a sequence in the mesh's channel order;
-        channels not given are NULL (capture: unchanged; apply: not written)."""
-        n = self.vertex_count
-        layout = self._channel_layout()
-        count = len(layout)
-        names = [name for name, _ in layout]
-        widths = [width for _, width in layout]
-        convert = _float_target if target else _float_input
-        keep = []
-        if positions is None:
-            if target:
-                # Positions are required by the C struct; applying into scratch drops them.
-                pos = np.empty(3 * n, dtype=np.float32)
-            else:
-                # The base's own positions: an unchanged copy without copying.
-                pos_ptr = _lib.csc_mesh_positions(self._ptr)
-                pos = None
+        during the call; see _host_arrays."""
+        return _host_arrays(self.vertex_count, self._channel_layout(), positions, channels,
+                            target, lambda: _lib.csc_mesh_positions(self._ptr))
+
+
+def _host_arrays(n: int, layout: Sequence[Tuple[str, int]], positions, channels, target: bool,
+                 base_positions=None) -> Tuple[csc_vertex_arrays, list]:
+    """csc_vertex_arrays over the host's arrays (in place) for a mesh of `n` vertices and the
+    channels `layout` [(name, width)], with the arrays to keep alive during the call.
+    channels: {name: array} or a sequence in the mesh's channel order; channels not given are
+    NULL (capture: unchanged; apply: not written). positions None: scratch when `target`, else
+    `base_positions()` (the base's own positions: an unchanged copy without copying)."""
+    count = len(layout)
+    names = [name for name, _ in layout]
+    widths = [width for _, width in layout]
+    convert = _float_target if target else _float_input
+    keep = []
+    if positions is None:
+        if target:
+            # Positions are required by the C struct; applying into scratch drops them.
+            pos = np.empty(3 * n, dtype=np.float32)
         else:
-            pos = convert(positions, 3 * n, "positions")
-        if pos is not None:
-            keep.append(pos)
-            pos_ptr = _fp(pos)
-        given = {}
-        if channels is not None:
-            if isinstance(channels, Mapping):
-                for name, values in channels.items():
-                    if name not in names:
-                        raise InvalidArgument(f"csculpt: the base mesh has no channel {name!r} "
-                                              f"(it has {names})")
-                    given[names.index(name)] = values
-            else:
-                channels = list(channels)
-                if len(channels) != count:
-                    raise InvalidArgument(f"csculpt: {len(channels)} channel arrays given, the "
-                                          f"base mesh has {count} channels")
-                given = {i: v for i, v in enumerate(channels) if v is not None}
-        ptrs = (_FloatP * max(count, 1))()
-        for i, values in given.items():
-            a = convert(values, n * widths[i], f"channel {names[i]!r}")
-            keep.append(a)
-            ptrs[i] = _fp(a)
-        arrays = csc_vertex_arrays(vertex_count=n, positions=pos_ptr, channel_count=count,
-                                   channels=ptrs)
-        keep.append(ptrs)
-        return arrays, keep
+            pos_ptr = base_positions()
+            pos = None
+    else:
+        pos = convert(positions, 3 * n, "positions")
+    if pos is not None:
+        keep.append(pos)
+        pos_ptr = _fp(pos)
+    given = {}
+    if channels is not None:
+        if isinstance(channels, Mapping):
+            for name, values in channels.items():
+                if name not in names:
+                    raise InvalidArgument(f"csculpt: the base mesh has no channel {name!r} "
+                                          f"(it has {names})")
+                given[names.index(name)] = values
+        else:
+            channels = list(channels)
+            if len(channels) != count:
+                raise InvalidArgument(f"csculpt: {len(channels)} channel arrays given, the "
+                                      f"base mesh has {count} channels")
+            given = {i: v for i, v in enumerate(channels) if v is not None}
+    ptrs = (_FloatP * max(count, 1))()
+    for i, values in given.items():
+        a = convert(values, n * widths[i], f"channel {names[i]!r}")
+        keep.append(a)
+        ptrs[i] = _fp(a)
+    arrays = csc_vertex_arrays(vertex_count=n, positions=pos_ptr, channel_count=count,
+                               channels=ptrs)
+    keep.append(ptrs)
+    return arrays, keep
 
 
 # ---- Hierarchy -----------------------------------------------------------------------------
@@ -1066,3 +1142,236 @@ class Merger(_Handle):
         t = csc_merge_timings()
         _lib.csc_merger_last_timings(self._ptr, ctypes.byref(t))
         return MergeTimings(t.isometry_ms, t.decompose_ms, t.blend_ms, t.apply_ms)
+
+
+# ---- Sessions ------------------------------------------------------------------------------
+
+# The options Session.create and Session.join take (csc_session_options' fields), with the
+# library's defaults (CSC_SESSION_OPTIONS_INIT); bind None = "tcp://127.0.0.1:*", name None = "",
+# id 0 = random.
+SESSION_OPTIONS: Dict[str, object] = {"bind": None, "name": None, "id": 0,
+                                      **csc_session_options._defaults_}
+
+
+def _session_options(options: Mapping[str, object]) -> csc_session_options:
+    unknown = sorted(set(options) - set(SESSION_OPTIONS))
+    if unknown:
+        raise TypeError(f"csculpt: unknown session option(s) {unknown} (valid: "
+                        f"{sorted(SESSION_OPTIONS)})")
+    o = csc_session_options()
+    for name, value in options.items():
+        ctype = dict(csc_session_options._fields_)[name]
+        if ctype is c_char_p:
+            if value is not None:
+                if not isinstance(value, str):
+                    raise InvalidArgument(f"csculpt: session option {name} must be a str")
+                value = value.encode("utf-8")
+        elif ctype is c_double:
+            value = float(value)
+        else:
+            # ctypes would wrap an out-of-range integer silently into another valid option.
+            bits = 8 * sizeof(ctype)
+            if isinstance(value, bool) or int(value) != value or not 0 <= value < 2**bits:
+                raise InvalidArgument(f"csculpt: session option {name} must be an integer in "
+                                      f"0..2^{bits}-1 (got {value!r})")
+            value = int(value)
+        setattr(o, name, value)
+    return o
+
+
+@dataclasses.dataclass(frozen=True)
+class SessionEvent:
+    """What happened in a session (csc_session_event). kind is an EventKind (a plain int for a
+    kind newer than this module); message is a copy of the library's text ("" if none)."""
+    kind: Union[EventKind, int]
+    peer: int
+    version: int
+    epoch: int
+    message: str
+
+
+@dataclasses.dataclass(frozen=True)
+class SessionStats:
+    """csc_session_stats: this peer as author, as merger, and the traffic it saw."""
+    id: int
+    version: int
+    epoch: int
+    merger: int
+    members: int
+    submits: int
+    submit_bytes: int
+    strokes_submitted: int
+    strokes_acknowledged: int
+    versions_applied: int
+    rebases: int
+    merges: int
+    merged_strokes: int
+    conflicting_strokes: int
+    merge_ms_mean: float
+    merge_ms_max: float
+    messages_received: int
+    messages_dropped: int
+    stale_ignored: int
+    auth_rejected: int
+
+
+class Session(_Handle):
+    """A serverless editing session over ZeroMQ (csc_session): this peer's share of the
+    agreed mesh and its link to the others. Networking runs on the library's own thread; no
+    method waits on the network except join().
+
+        with csculpt.Session.create(mesh, sync_ms=250) as s:   # others: Session.join(s.invite)
+            while editing:
+                s.update(positions, channels)      # merged versions in, host arrays rebased
+                ...the artist edits positions / channels in place...
+                s.submit(positions, channels, strokes=1)
+                for event in s.events(): ...
+
+    The host's arrays are written in place by submit() and update(): positions (N, 3) or
+    (3N,) and channels {name: array} or a sequence in the session mesh's channel order, each a
+    writeable C-contiguous float32 array (anything else is refused, as a converted copy would
+    lose the writes). Channels not given are neither read nor written. Use a Session from one
+    thread at a time."""
+    _destroy_name = "csc_session_destroy"
+    _kind = "session"
+
+    def __init__(self):
+        raise TypeError("use Session.create or Session.join")
+
+    @classmethod
+    def _adopt(cls, ptr) -> "Session":
+        session = cls.__new__(cls)
+        _Handle.__init__(session, ptr)
+        try:
+            # The layout the host's arrays are checked against, read once: it cannot change.
+            with session.base() as base:
+                session._vertex_count = base.vertex_count
+                session._layout = tuple(base._channel_layout())
+        except BaseException:
+            session.close()
+            raise
+        return session
+
+    @classmethod
+    def create(cls, mesh: Mesh, **options) -> "Session":
+        """Starts a session on `mesh` (copied; version 0). options: see SESSION_OPTIONS.
+        Raises IoError if `bind` cannot be bound."""
+        o = _session_options(options)
+        out = _SessionP()
+        _lib.csc_session_create(ctypes.byref(out), mesh._ptr, ctypes.byref(o))
+        return cls._adopt(out)
+
+    @classmethod
+    def join(cls, invite: str, **options) -> "Session":
+        """Joins the session of `invite` and waits up to join_timeout_ms for the snapshot.
+        Raises InvalidInput for a malformed invite, IoError when no snapshot came."""
+        if not isinstance(invite, str):
+            raise InvalidArgument(f"csculpt: invite must be a str (got {type(invite).__name__})")
+        o = _session_options(options)
+        out = _SessionP()
+        _lib.csc_session_join(ctypes.byref(out), invite.encode("utf-8"), ctypes.byref(o))
+        return cls._adopt(out)
+
+    @property
+    def invite(self) -> str:
+        """What others join with (it carries the session's keys: share it only with them)."""
+        return _lib.csc_session_invite(self._ptr).decode("utf-8")
+
+    @property
+    def id(self) -> int:
+        return _lib.csc_session_id(self._ptr)
+
+    @property
+    def version(self) -> int:
+        """The agreed version update() last applied."""
+        return _lib.csc_session_version(self._ptr)
+
+    @property
+    def vertex_count(self) -> int:
+        return self._vertex_count
+
+    @property
+    def channel_names(self) -> Tuple[str, ...]:
+        return tuple(name for name, _ in self._layout)
+
+    def base(self) -> Mesh:
+        """A copy of the agreed version's mesh (e.g. to fill the host's arrays after join)."""
+        out = _MeshP()
+        _lib.csc_session_copy_base(ctypes.byref(out), self._ptr)
+        return Mesh._adopt(out)
+
+    def _arrays(self, positions, channels):
+        ptr = self._ptr  # a closed session says so before the arrays are inspected
+        if positions is None:
+            # The library reads and writes every position: a scratch array would send garbage.
+            raise InvalidArgument("csculpt: the session needs the host's positions")
+        arrays, keep = _host_arrays(self._vertex_count, self._layout, positions, channels,
+                                    target=True)
+        return ptr, arrays, keep
+
+    def submit(self, positions, channels=None, strokes: int = 0) -> bool:
+        """Sends the edit from the agreed version to the host's arrays, replacing what was
+        sent before for this version; `strokes` counts strokes made since the last submit that
+        returned True. Changed values are rewritten in place to what the peers receive (within
+        the wire tolerance). Returns False when there was nothing new to send."""
+        if isinstance(strokes, bool) or int(strokes) != strokes or not 0 <= strokes < 2**32:
+            raise InvalidArgument(f"csculpt: strokes must be an integer in 0..2^32-1 "
+                                  f"(got {strokes!r})")
+        ptr, arrays, keep = self._arrays(positions, channels)
+        sent = c_int32()
+        _lib.csc_session_submit(ptr, ctypes.byref(arrays), strokes, ctypes.byref(sent))
+        del keep
+        return bool(sent.value)
+
+    def update(self, positions, channels=None) -> int:
+        """Applies the merged versions received so far and rebases the host's arrays onto
+        them, in place (unmerged local edits are kept). Returns the versions applied."""
+        ptr, arrays, keep = self._arrays(positions, channels)
+        applied = c_uint32()
+        _lib.csc_session_update(ptr, ctypes.byref(arrays), ctypes.byref(applied))
+        del keep
+        return applied.value
+
+    def poll(self) -> Optional[SessionEvent]:
+        """The next event, or None. Never blocks."""
+        e = csc_session_event()
+        has = c_int32()
+        _lib.csc_session_poll(self._ptr, ctypes.byref(e), ctypes.byref(has))
+        if not has.value:
+            return None
+        try:
+            kind = EventKind(e.kind)
+        except ValueError:
+            kind = e.kind
+        # The message is borrowed until the next poll: decode (copy) it now.
+        return SessionEvent(kind, e.peer, e.version, e.epoch,
+                            (e.message or b"").decode("utf-8", "replace"))
+
+    def events(self) -> list:
+        """Every event waiting, oldest first (drains the queue)."""
+        result = []
+        while True:
+            event = self.poll()
+            if event is None:
+                return result
+            result.append(event)
+
+    @property
+    def stats(self) -> SessionStats:
+        s = csc_session_stats()
+        _lib.csc_session_get_stats(self._ptr, ctypes.byref(s))
+        return SessionStats(**{f: getattr(s, f) for f, _ in csc_session_stats._fields_[1:]})
+
+    def attribution_colors(self) -> np.ndarray:
+        """Who changed what, as vertex colours (N, 3) float32 in [0, 1]: peers get green,
+        blue, red, ... by increasing id, mixed where several edited; light grey where nobody
+        did."""
+        rgb = np.empty((self._vertex_count, 3), dtype=np.float32)
+        _lib.csc_session_attribution_colors(self._ptr, _fp(rgb), self._vertex_count)
+        return rgb
+
+    def leave(self) -> None:
+        """Tells the others this peer leaves and stops the network thread. Reads (invite, id,
+        version, base, events, stats, attribution_colors) still work; submit and update raise
+        InvalidArgument."""
+        _lib.csc_session_leave(self._ptr)

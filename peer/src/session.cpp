@@ -621,7 +621,14 @@ class Node {
       ++stats_.messages_received;
       stats_.bytes_received += payload.size();
     }
+    // FlatBuffers reads scalars in place: a message ZeroMQ hands over at an address not aligned
+    // for 8-byte fields is copied into aligned storage first.
     const auto* data = static_cast<const std::uint8_t*>(payload.data());
+    if (reinterpret_cast<std::uintptr_t>(data) % alignof(std::uint64_t) != 0) {
+      inbound_.resize((payload.size() + 7) / 8);
+      std::memcpy(inbound_.data(), data, payload.size());
+      data = reinterpret_cast<const std::uint8_t*>(inbound_.data());
+    }
     if (payload.size() < 8 || !fb::EnvelopeBufferHasIdentifier(data))
       return dropped("message is not a cSculpt session envelope");
     flatbuffers::Verifier verifier(data, payload.size(), 16, 10000);
@@ -1226,6 +1233,7 @@ class Node {
   std::vector<std::uint8_t> snap_buffer_;
   std::size_t snap_received_ = 0;
   std::unique_ptr<Merger> merger_;
+  std::vector<std::uint64_t> inbound_;  // aligned copy of a misaligned message
 
   // shared with the host (mutex_)
   mutable std::mutex mutex_;

@@ -155,6 +155,30 @@ flatbuffers::Offset<fb::AttributeChanges> build_attribute(flatbuffers::FlatBuffe
 
 // ---- decoding ------------------------------------------------------------------------------
 
+/// FlatBuffers reads scalars in place, so a buffer must sit at an address aligned for its
+/// largest scalar (8: the ulong fields); bytes from a socket, a nested vector or a host need
+/// not. Misaligned input is copied once into aligned storage.
+class AlignedBytes {
+ public:
+  explicit AlignedBytes(std::span<const std::uint8_t> bytes) : original_(bytes), view_(bytes) {
+    if (reinterpret_cast<std::uintptr_t>(bytes.data()) % alignof(std::uint64_t) == 0) return;
+    storage_.resize((bytes.size() + 7) / 8);
+    std::memcpy(storage_.data(), bytes.data(), bytes.size());
+    view_ = {reinterpret_cast<const std::uint8_t*>(storage_.data()), bytes.size()};
+  }
+  std::span<const std::uint8_t> bytes() const { return view_; }
+  /// A view into the aligned bytes, as the same bytes of the caller's buffer.
+  std::string_view in_original(std::string_view v) const {
+    if (v.empty() || view_.data() == original_.data()) return v;
+    const auto offset = reinterpret_cast<const std::uint8_t*>(v.data()) - view_.data();
+    return {reinterpret_cast<const char*>(original_.data()) + offset, v.size()};
+  }
+
+ private:
+  std::span<const std::uint8_t> original_, view_;
+  std::vector<std::uint64_t> storage_;
+};
+
 const fb::DiffMessage* verified_message(std::span<const std::uint8_t> bytes,
                                         const DecodeLimits& limits) {
   if (bytes.size() > limits.max_bytes)
@@ -324,13 +348,18 @@ std::vector<std::uint8_t> encode_diff(const Diff& diff, const Mesh& base, const 
 }
 
 DiffHeader peek_diff_header(std::span<const std::uint8_t> bytes, const DecodeLimits& limits) {
-  return header_of(*verified_message(bytes, limits));
+  const AlignedBytes aligned(bytes);
+  DiffHeader h = header_of(*verified_message(aligned.bytes(), limits));
+  h.author = aligned.in_original(h.author);
+  return h;
 }
 
 Diff decode_diff(std::span<const std::uint8_t> bytes, const Mesh& base, DiffHeader* header,
                  const DecodeLimits& limits) {
-  const fb::DiffMessage& m = *verified_message(bytes, limits);
+  const AlignedBytes aligned(bytes);
+  const fb::DiffMessage& m = *verified_message(aligned.bytes(), limits);
   DiffHeader h = header_of(m);
+  h.author = aligned.in_original(h.author);
   if (h.vertex_count != base.vertex_count())
     throw InvalidInput("diff message is for " + std::to_string(h.vertex_count) +
                        " vertices but the base mesh has " + std::to_string(base.vertex_count()));

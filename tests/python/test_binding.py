@@ -42,7 +42,7 @@ _BASES = {
     "uint8_t": ctypes.c_uint8, "uint32_t": ctypes.c_uint32, "uint64_t": ctypes.c_uint64,
     "int32_t": ctypes.c_int32, "size_t": ctypes.c_size_t, "float": ctypes.c_float,
     "double": ctypes.c_double, "csc_status": ctypes.c_int, "csc_linearisation": ctypes.c_int,
-    "csc_merge_method": ctypes.c_int,
+    "csc_merge_method": ctypes.c_int, "csc_event_kind": ctypes.c_int,
 }
 
 
@@ -146,7 +146,8 @@ class Enums(unittest.TestCase):
         text = header_text()
         enums = {"csc_status": (csculpt.Status, "CSC_"),
                  "csc_linearisation": (csculpt.Linearisation, "CSC_LINEARISATION_"),
-                 "csc_merge_method": (csculpt.MergeMethod, "CSC_MERGE_")}
+                 "csc_merge_method": (csculpt.MergeMethod, "CSC_MERGE_"),
+                 "csc_event_kind": (csculpt.EventKind, "CSC_EVENT_")}
         found = re.findall(r"typedef enum (csc_\w+) \{(.*?)\}", text, flags=re.S)
         self.assertEqual(sorted(name for name, _ in found), sorted(enums))
         for name, body in found:

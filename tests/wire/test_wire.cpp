@@ -315,6 +315,33 @@ INSTANTIATE_TEST_SUITE_P(AssimpModels, WireRealMesh,
 // ---- lossless and idempotent
 // ---------------------------------------------------------------------
 
+TEST(WireRoundTrip, MisalignedBytesDecodeTheSameAndPeekPointsIntoTheCallersBuffer) {
+  // Sockets and nested vectors hand messages over at any address; FlatBuffers reads 8-byte
+  // fields in place, so the decoder must not depend on the caller's alignment.
+  const Mesh base = make_sphere(2000, true);
+  Mesh edited = base;
+  for (const Stroke& s : scripted_strokes(base, 9, 6, true)) apply_stroke(edited, s);
+  const Diff d = capture_diff(base, edited);
+  DiffHeader h;
+  h.author = "misaligned";
+  h.base_version = 0x0102030405060708ull;
+  const std::vector<std::uint8_t> bytes = encode_diff(d, base, h);
+  const Diff expected = decode_diff(bytes, base);
+  for (std::size_t shift = 1; shift < 8; ++shift) {
+    std::vector<std::uint8_t> buffer(bytes.size() + shift);
+    std::copy(bytes.begin(), bytes.end(), buffer.begin() + static_cast<std::ptrdiff_t>(shift));
+    const std::span<const std::uint8_t> at(buffer.data() + shift, bytes.size());
+    DiffHeader got;
+    EXPECT_EQ(decode_diff(at, base, &got), expected) << shift;
+    EXPECT_EQ(got.base_version, h.base_version);
+    const DiffHeader peeked = peek_diff_header(at);
+    EXPECT_EQ(peeked.author, "misaligned");
+    EXPECT_GE(reinterpret_cast<const std::uint8_t*>(peeked.author.data()), at.data());
+    EXPECT_LE(reinterpret_cast<const std::uint8_t*>(peeked.author.data()) + peeked.author.size(),
+              at.data() + at.size());
+  }
+}
+
 TEST(WireLossless, ZeroTolerancesAreBitExact) {
   const Mesh base = make_sphere(5000, true);
   Mesh edited = base;
