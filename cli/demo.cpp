@@ -1,153 +1,341 @@
-// `csculpt demo`: the merge in the loop of a collaborative session, on the built-in sphere.
-// Until the ZeroMQ peer session lands, the artists run in this process and sync by rounds.
+// `csculpt demo`: N simulated artists in one serverless session on this machine. Every artist
+// runs on its own host thread over its own peer::Session (which has its own network thread and
+// sockets), exactly as separate programs would; only the summary is gathered in-process.
 #include "demo.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
-#include <cmath>
 #include <cstdio>
+#include <exception>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
 #include <vector>
 
-#include "csculpt/diff.h"
+#include "artist.h"
 #include "csculpt/generate.h"
-#include "csculpt/hierarchy.h"
 #include "csculpt/io.h"
-#include "csculpt/merge.h"
+#include "csculpt/peer/session.h"
 
 namespace csculpt::cli {
+namespace {
+
+using peer::Clock;
+using peer::Millis;
+
+double seconds_between(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
+
+/// What an artist thread publishes after each turn, so the main thread never touches a
+/// session it does not own (Session's host side is single-threaded).
+struct Published {
+  peer::SessionStats stats;
+  std::uint64_t version = 0;
+  std::uint32_t strokes = 0;
+  std::uint64_t unacknowledged = 0;
+  std::uint64_t local_digest = 0, base_digest = 0;
+  bool digests = false;  ///< computed since editing stopped
+  bool ready = false;
+  std::string error;
+};
+
+struct Peer {
+  std::unique_ptr<peer::Session> session;
+  std::unique_ptr<SimulatedArtist> artist;
+  std::thread thread;
+  mutable std::mutex mutex;
+  Published published;
+
+  Published snapshot() const {
+    std::lock_guard lock(mutex);
+    return published;
+  }
+};
+
+enum class Phase : int { setup, editing, syncing, stop };
+
+std::string peer_name(std::uint32_t k) {
+  return k < 26 ? std::string(1, static_cast<char>('A' + k)) : "P" + std::to_string(k + 1);
+}
+
+peer::SessionOptions session_options(const DemoOptions& o, std::uint32_t k) {
+  peer::SessionOptions s;
+  s.id = k + 1;  // the lowest id merges: A, whose attribution hue is green
+  s.name = peer_name(k);
+  s.sync = Millis{o.sync_ms};
+  return s;
+}
+
+/// One artist's host loop: step (update, strokes, periodic submit), publish, and once editing
+/// has stopped, the digests the main thread compares for convergence.
+void artist_loop(Peer& p, const DemoOptions& o, std::uint32_t k, const std::atomic<int>& phase) {
+  try {
+    ArtistOptions ao;
+    ao.seed = o.seed * 7919 + k;
+    ao.strokes_per_second = o.strokes_per_second;
+    ao.submit_every = Millis{o.sync_ms};
+    p.artist = std::make_unique<SimulatedArtist>(*p.session, ao);
+    {
+      std::lock_guard lock(p.mutex);
+      p.published.ready = true;
+    }
+    while (phase.load() == static_cast<int>(Phase::setup)) std::this_thread::sleep_for(Millis{1});
+    Clock::time_point next_digest{};
+    while (true) {
+      const int ph = phase.load();
+      if (ph == static_cast<int>(Phase::stop)) break;
+      const bool editing = ph == static_cast<int>(Phase::editing);
+      const auto now = Clock::now();
+      p.artist->step(now, editing);
+      Published out;
+      out.ready = true;
+      out.stats = p.session->stats();
+      out.version = p.session->version();
+      out.strokes = p.artist->strokes();
+      out.unacknowledged = p.artist->unacknowledged();
+      if (!editing && now >= next_digest) {
+        // Hashing a 320K-face mesh costs a few ms: often enough to notice convergence soon.
+        next_digest = now + Millis{std::max<std::uint32_t>(10, o.sync_ms / 5)};
+        out.local_digest = peer::mesh_digest(p.artist->local());
+        out.base_digest = peer::mesh_digest(p.session->base());
+        out.digests = true;
+      } else {
+        std::lock_guard lock(p.mutex);
+        out.local_digest = p.published.local_digest;
+        out.base_digest = p.published.base_digest;
+        out.digests = p.published.digests && !editing;
+      }
+      {
+        std::lock_guard lock(p.mutex);
+        p.published = std::move(out);
+      }
+      std::this_thread::sleep_for(Millis{2});
+    }
+  } catch (const std::exception& e) {
+    std::lock_guard lock(p.mutex);
+    p.published.error = e.what();
+    p.published.ready = true;
+  }
+}
+
+bool all_converged(const std::vector<Published>& s) {
+  for (const Published& p : s)
+    if (!p.digests || p.version != s[0].version || p.local_digest != p.base_digest ||
+        p.base_digest != s[0].base_digest || p.unacknowledged != 0)
+      return false;
+  return true;
+}
+
+}  // namespace
 
 int run_demo(const DemoOptions& o) {
-  const MergeMethod method = merge_method_from_string(o.method);
-  Mesh version = make_sphere(o.faces, true);
-  const std::size_t n = version.vertex_count();
-  const auto t0 = std::chrono::steady_clock::now();
-  const Hierarchy hierarchy = Hierarchy::build(version);
-  const double hierarchy_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  const MergeFrame frame = MergeFrame::fit(version.positions);  // once per session
-  Merger merger(hierarchy);
-  std::fprintf(
-      stderr,
-      "session: %u artists on a %zu-face sphere (%zu vertices), hierarchy %u levels in %.1f ms\n",
-      o.artists, version.face_count(), n, hierarchy.stats().levels, hierarchy_ms);
+  const auto t_start = Clock::now();
+  const Mesh sphere = make_sphere(o.faces, /*materials=*/true);
+  const std::size_t n = sphere.vertex_count();
+  std::vector<std::unique_ptr<Peer>> peers;
+  for (std::uint32_t k = 0; k < o.peers; ++k) peers.push_back(std::make_unique<Peer>());
 
-  // Per artist: its scripted strokes, and how much it moved each vertex (attribution).
-  std::vector<std::vector<Stroke>> scripts;
-  for (std::uint32_t a = 0; a < o.artists; ++a)
-    scripts.push_back(scripted_strokes(version, o.seed * 7919 + a, o.rounds * o.strokes_per_round));
-  std::vector<std::vector<float>> contribution(o.artists, std::vector<float>(n, 0.f));
+  // A creates the session; the others join with its invite (snapshot, then each builds the
+  // merge hierarchy for itself).
+  peers[0]->session = peer::Session::create(sphere, session_options(o, 0));
+  const std::string invite = peers[0]->session->invite();
+  for (std::uint32_t k = 1; k < o.peers; ++k)
+    peers[k]->session = peer::Session::join(invite, session_options(o, k));
+  // Until the artist threads start, this thread is every session's host: wait until everyone
+  // knows everyone (heartbeats spread membership), so the first submits reach the merger.
+  const auto members_deadline = Clock::now() + Millis{10000};
+  while (Clock::now() < members_deadline) {
+    bool all = true;
+    for (const auto& p : peers) all &= p->session->stats().members == o.peers;
+    if (all) break;
+    std::this_thread::sleep_for(Millis{5});
+  }
+  const double setup_s = seconds_between(t_start, Clock::now());
+  std::fprintf(stderr,
+               "session: %u peers on a %zu-face sphere (%zu vertices), sync every %u ms, "
+               "joined in %.2f s; invite %s\n",
+               o.peers, sphere.face_count(), n, o.sync_ms, setup_s,
+               invite.substr(0, invite.find(':') + 9).c_str());
 
-  std::uint32_t strokes = 0, conflicting = 0;
-  double merge_sum = 0, merge_max = 0;
-  std::size_t diff_vertices = 0;
-  std::vector<std::uint32_t> owner_round(n, 0), owner_mask(n, 0);
-  for (std::uint32_t round = 0; round < o.rounds; ++round) {
-    std::vector<Diff> diffs;
-    // which artists touched each vertex this round (for the conflict count)
-    std::vector<std::vector<std::vector<std::uint32_t>>> stroke_sets(o.artists);
-    for (std::uint32_t a = 0; a < o.artists; ++a) {
-      Mesh local = version;
-      for (std::uint32_t s = 0; s < o.strokes_per_round; ++s) {
-        const Mesh before = local;
-        apply_stroke(local, scripts[a][round * o.strokes_per_round + s], &hierarchy.topology());
-        const Diff stroke = capture_diff(before, local);
-        std::vector<std::uint32_t> touched = stroke.positions.indices;
-        for (const ChannelDiff& c : stroke.channels)
-          touched.insert(touched.end(), c.change.indices.begin(), c.change.indices.end());
-        std::sort(touched.begin(), touched.end());
-        touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
-        for (std::uint32_t v : touched) {
-          if (owner_round[v] != round + 1) {
-            owner_round[v] = round + 1;
-            owner_mask[v] = 0;
-          }
-          owner_mask[v] |= 1u << (a % 32);
-        }
-        stroke_sets[a].push_back(std::move(touched));
-        ++strokes;
-      }
-      diffs.push_back(capture_diff(version, local));
-      diff_vertices += diffs.back().touched_vertices();
-      for (std::size_t i = 0; i < diffs.back().positions.indices.size(); ++i) {
-        const std::uint32_t v = diffs.back().positions.indices[i];
-        const float* p = diffs.back().positions.values.data() + 3 * i;
-        const float dx = p[0] - version.positions[v].x, dy = p[1] - version.positions[v].y,
-                    dz = p[2] - version.positions[v].z;
-        contribution[a][v] += std::sqrt(dx * dx + dy * dy + dz * dz);
-      }
+  std::atomic<int> phase{static_cast<int>(Phase::setup)};
+  for (std::uint32_t k = 0; k < o.peers; ++k)
+    peers[k]->thread =
+        std::thread(artist_loop, std::ref(*peers[k]), std::cref(o), k, std::cref(phase));
+  auto published = [&] {
+    std::vector<Published> s;
+    for (const auto& p : peers) s.push_back(p->snapshot());
+    return s;
+  };
+  while (true) {  // artists build their topology and stroke scripts in parallel
+    const auto s = published();
+    if (std::all_of(s.begin(), s.end(), [](const Published& p) { return p.ready; })) break;
+    std::this_thread::sleep_for(Millis{5});
+  }
+
+  const auto t_edit = Clock::now();
+  const auto edit_end = t_edit + std::chrono::duration_cast<Clock::duration>(
+                                     std::chrono::duration<double>(o.seconds));
+  phase = static_cast<int>(Phase::editing);
+
+  // Live merge lines: whichever peer merges (the election may move it), from its counters.
+  std::vector<peer::SessionStats> last(o.peers);
+  std::uint64_t printed_version = 0;
+  auto report_merges = [&](const std::vector<Published>& s) {
+    std::uint64_t submits = 0, submit_bytes = 0, last_submits = 0, last_submit_bytes = 0;
+    for (std::uint32_t k = 0; k < o.peers; ++k) {
+      submits += s[k].stats.submits;
+      submit_bytes += s[k].stats.submit_bytes;
+      last_submits += last[k].submits;
+      last_submit_bytes += last[k].submit_bytes;
     }
-    // MeshHisto (paper §3.3) rejects an edit that touches a vertex another artist touched
-    // in the same sync window.
-    std::uint32_t round_conflicts = 0;
-    for (std::uint32_t a = 0; a < o.artists; ++a)
-      for (const auto& set : stroke_sets[a])
-        for (std::uint32_t v : set)
-          if (owner_mask[v] & ~(1u << (a % 32))) {
-            ++round_conflicts;
-            break;
-          }
-    conflicting += round_conflicts;
+    bool printed = false;
+    for (std::uint32_t k = 0; k < o.peers; ++k) {
+      const peer::SessionStats& now = s[k].stats;
+      const peer::SessionStats& before = last[k];
+      if (now.merges <= before.merges) continue;
+      const std::uint64_t merges = now.merges - before.merges;
+      const std::uint32_t others = now.members > 0 ? now.members - 1 : 0;
+      // Each merge makes the next version. The counters are published a moment before the
+      // version number, so the number is counted here rather than read.
+      const std::uint64_t to = std::max(now.version, printed_version + merges);
+      printed_version = to;
+      const std::string label =
+          merges == 1 ? "version " + std::to_string(to)
+                      : "versions " + std::to_string(to - merges + 1) + "-" + std::to_string(to);
+      std::fprintf(
+          stderr,
+          "[%5.1f s] %s by %s: merge %.1f ms, %llu strokes (%llu conflicting), "
+          "%llu submits in (%.1f KB), %.1f KB out to %u peers\n",
+          seconds_between(t_edit, Clock::now()), label.c_str(), peer_name(k).c_str(),
+          (now.merge_ms_sum - before.merge_ms_sum) / static_cast<double>(merges),
+          static_cast<unsigned long long>(now.merged_strokes - before.merged_strokes),
+          static_cast<unsigned long long>(now.conflicting_strokes - before.conflicting_strokes),
+          static_cast<unsigned long long>(printed ? 0 : submits - last_submits),
+          printed ? 0.0 : static_cast<double>(submit_bytes - last_submit_bytes) / 1024.0,
+          static_cast<double>(now.version_bytes_sent - before.version_bytes_sent) / 1024.0, others);
+      printed = true;
+    }
+    if (printed)
+      for (std::uint32_t k = 0; k < o.peers; ++k) last[k] = s[k].stats;
+  };
 
-    const auto m0 = std::chrono::steady_clock::now();
-    const Diff merged = merger.merge(version, diffs, method, frame);
-    const double ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - m0).count();
-    apply_diff(merged, version);
-    merge_sum += ms;
-    merge_max = std::max(merge_max, ms);
-    std::fprintf(stderr,
-                 "merge %2u: %u diffs, %zu vertices changed, %.2f ms, %u edits would conflict\n",
-                 round + 1, o.artists, merged.touched_vertices(), ms, round_conflicts);
+  std::string error;
+  auto check_errors = [&](const std::vector<Published>& s) {
+    for (std::uint32_t k = 0; k < o.peers && error.empty(); ++k)
+      if (!s[k].error.empty()) error = peer_name(k) + ": " + s[k].error;
+    return error.empty();
+  };
+  while (Clock::now() < edit_end) {
+    const auto s = published();
+    report_merges(s);
+    if (!check_errors(s)) break;
+    std::this_thread::sleep_for(Millis{10});
   }
 
-  // Attribution colours (paper Fig. 1): green for artist A, blue for B, cyan for both,
-  // further artists red/yellow/magenta; brightness by share of the total change.
-  static const float palette[6][3] = {{0, 1, 0}, {0, 0, 1}, {1, 0, 0},
-                                      {1, 1, 0}, {1, 0, 1}, {1, 0.5f, 0}};
-  std::vector<float> colour(3 * n, 0.f);
-  for (std::size_t v = 0; v < n; ++v) {
-    float total = 0;
-    for (std::uint32_t a = 0; a < o.artists; ++a) total += contribution[a][v];
-    if (!(total > 0)) continue;
-    for (std::uint32_t a = 0; a < o.artists; ++a)
-      for (int c = 0; c < 3; ++c)
-        colour[3 * v + static_cast<std::size_t>(c)] =
-            std::min(1.f, colour[3 * v + static_cast<std::size_t>(c)] +
-                              palette[a % 6][c] * std::min(1.f, 2.f * contribution[a][v] / total));
+  // Editing stops; syncing goes on until every peer holds the same version and mesh.
+  phase = static_cast<int>(Phase::syncing);
+  const auto t_sync = Clock::now();
+  const auto sync_deadline =
+      t_sync + std::chrono::duration_cast<Clock::duration>(
+                   std::chrono::duration<double>(o.converge_timeout_seconds));
+  bool converged = false;
+  while (error.empty() && Clock::now() < sync_deadline) {
+    const auto s = published();
+    report_merges(s);
+    if (!check_errors(s)) break;
+    if (all_converged(s)) {
+      converged = true;
+      break;
+    }
+    std::this_thread::sleep_for(Millis{10});
   }
-  ChannelDesc attribution{"attribution", 3, Linearisation::identity, 0.f, 1.f};
-  const int index = version.add_channel(attribution);
-  version.channels[static_cast<std::size_t>(index)].values = colour;
-  write_mesh(version, o.out);
+  const double converge_s = seconds_between(t_sync, Clock::now());
+  phase = static_cast<int>(Phase::stop);
+  for (const auto& p : peers) p->thread.join();
+  report_merges(published());
 
+  // The artist threads are done: this thread is every session's host again.
+  std::uint64_t strokes = 0, merges = 0, conflicting = 0, submit_bytes = 0, lost = 0,
+                version_bytes = 0, rebases = 0, dropped = 0;
+  double merge_sum = 0, merge_max = 0;
+  for (const auto& p : peers) {
+    const peer::SessionStats st = p->session->stats();
+    if (p->artist) {
+      strokes += p->artist->strokes();
+      lost += p->artist->unacknowledged();
+    }
+    merges += st.merges;
+    conflicting += st.conflicting_strokes;
+    submit_bytes += st.submit_bytes;
+    version_bytes += st.version_bytes_sent;
+    rebases += st.rebases;
+    dropped += st.messages_dropped;
+    merge_sum += st.merge_ms_sum;
+    merge_max = std::max(merge_max, st.merge_ms_max);
+  }
+  const peer::Session& first = *peers[0]->session;
+  Mesh final_mesh = peers[0]->artist ? peers[0]->artist->local() : first.base();
+  const ChannelDesc attribution{"attribution", 3, Linearisation::identity, 0.f, 1.f};
+  const int index = final_mesh.add_channel(attribution);
+  final_mesh.channels[static_cast<std::size_t>(index)].values =
+      peer::attribution_colours(first.attribution(), n);
+  write_mesh(final_mesh, o.out);
+  const std::uint64_t version = first.version();
+  for (auto& p : peers) p->artist.reset();
+  for (auto& p : peers) p->session.reset();  // leave
+
+  if (!error.empty()) std::fprintf(stderr, "csculpt: error: %s\n", error.c_str());
+  std::fprintf(stderr, "%s after %.2f s of syncing; final mesh in %s\n",
+               converged ? "converged" : "NOT converged", converge_s, o.out.c_str());
   std::printf(
-      "{\"artists\":%u,\"faces\":%zu,\"vertices\":%zu,\"method\":\"%s\",\"rounds\":%u,\"strokes\":%"
-      "u,"
-      "\"merges\":%u,\"merge_ms_mean\":%.3f,\"merge_ms_max\":%.3f,\"vertices_per_diff\":%.0f,"
-      "\"conflicting_edits\":%u,\"conflicting_fraction\":%.3f,\"out\":\"%s\"}\n",
-      o.artists, version.face_count(), n, std::string(to_string(method)).c_str(), o.rounds, strokes,
-      o.rounds, merge_sum / std::max(1u, o.rounds), merge_max,
-      static_cast<double>(diff_vertices) / std::max(1u, o.rounds * o.artists), conflicting,
-      strokes ? static_cast<double>(conflicting) / strokes : 0.0, o.out.c_str());
-  return 0;
+      "{\"peers\":%u,\"faces\":%zu,\"vertices\":%zu,\"sync_ms\":%u,\"seconds\":%.1f,"
+      "\"strokes\":%llu,\"merges\":%llu,\"version\":%llu,\"merge_ms_mean\":%.3f,"
+      "\"merge_ms_max\":%.3f,\"bytes_per_stroke\":%.0f,\"submit_bytes\":%llu,"
+      "\"version_bytes\":%llu,\"conflicting_edits\":%llu,\"conflicting_fraction\":%.3f,"
+      "\"rebases\":%llu,\"messages_dropped\":%llu,\"converged\":%s,\"converge_s\":%.3f,"
+      "\"lost_edits\":%llu,\"setup_s\":%.2f,\"wall_s\":%.2f,\"out\":\"%s\"}\n",
+      o.peers, sphere.face_count(), n, o.sync_ms, o.seconds,
+      static_cast<unsigned long long>(strokes), static_cast<unsigned long long>(merges),
+      static_cast<unsigned long long>(version),
+      merges ? merge_sum / static_cast<double>(merges) : 0.0, merge_max,
+      strokes ? static_cast<double>(submit_bytes) / static_cast<double>(strokes) : 0.0,
+      static_cast<unsigned long long>(submit_bytes), static_cast<unsigned long long>(version_bytes),
+      static_cast<unsigned long long>(conflicting),
+      strokes ? static_cast<double>(conflicting) / static_cast<double>(strokes) : 0.0,
+      static_cast<unsigned long long>(rebases), static_cast<unsigned long long>(dropped),
+      converged ? "true" : "false", converge_s, static_cast<unsigned long long>(lost), setup_s,
+      seconds_between(t_start, Clock::now()), o.out.c_str());
+  std::fflush(stdout);
+  return converged && lost == 0 && error.empty() ? 0 : 1;
 }
 
 CLI::App* add_demo_command(CLI::App& app, DemoOptions& o) {
   CLI::App* demo = app.add_subcommand(
-      "demo", "a collaborative session in this process: artists sculpt and paint, edits merge");
-  demo->add_option("--artists", o.artists, "simulated artists")
+      "demo",
+      "a serverless session on this machine: simulated artists sculpt and paint one mesh, "
+      "their edits merge every sync interval");
+  demo->add_option("--peers", o.peers, "simulated artists, one peer session each")
       ->capture_default_str()
       ->check(CLI::Range(1u, 32u));
+  demo->add_option("--seconds", o.seconds, "editing time (syncing continues until converged)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 86400.0));
   demo->add_option("--faces", o.faces, "faces of the built-in sphere")
       ->capture_default_str()
       ->check(CLI::Range(20u, 20000000u));
-  demo->add_option("--rounds", o.rounds, "sync rounds (one merge each)")
+  demo->add_option("--sync-ms", o.sync_ms, "merge interval in milliseconds")
       ->capture_default_str()
-      ->check(CLI::Range(1u, 100000u));
-  demo->add_option("--strokes", o.strokes_per_round, "strokes per artist per round")
+      ->check(CLI::Range(10u, 600000u));
+  demo->add_option("--strokes-per-second", o.strokes_per_second, "strokes per artist per second")
       ->capture_default_str()
-      ->check(CLI::Range(1u, 1000u));
-  demo->add_option("--method", o.method, "merge method")->capture_default_str();
+      ->check(CLI::Range(0.0, 1000.0));
+  demo->add_option("--converge-timeout", o.converge_timeout_seconds,
+                   "seconds to wait for convergence after editing stops")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 3600.0));
   demo->add_option("-o,--out", o.out, "final mesh (PLY with materials and attribution colours)")
       ->capture_default_str();
   demo->add_option("--seed", o.seed, "stroke seed")->capture_default_str();

@@ -915,6 +915,7 @@ class Node {
     item.merged_by = r.merged_by;
     {
       std::lock_guard lock(mutex_);
+      stats_.version = version_;
       items_.push_back(std::move(item));
       for (std::size_t i = 0; i < r.merged_by.size(); ++i)
         if (r.merged_by[i].first == self_) stats_.strokes_acknowledged += r.merged_strokes[i];
@@ -1194,16 +1195,17 @@ class Node {
     pending_.clear();
     const std::vector<std::uint8_t> message = version_message(r, false);
     broadcast(message);
-    {
-      std::lock_guard lock(mutex_);
-      ++stats_.merges;
-      stats_.merged_strokes += merged_strokes;
-      stats_.conflicting_strokes += r.conflicting;
-      stats_.merge_ms_sum += merge_ms;
-      stats_.merge_ms_max = std::max(stats_.merge_ms_max, double(merge_ms));
-      stats_.version_bytes_sent += message.size() * membership_.others().size();
-    }
+    const std::uint32_t conflicting = r.conflicting;
     apply_version(std::move(r));
+    // After applying, so a reader never sees a merge counted before its version.
+    std::lock_guard lock(mutex_);
+    stats_.version = version_;
+    ++stats_.merges;
+    stats_.merged_strokes += merged_strokes;
+    stats_.conflicting_strokes += conflicting;
+    stats_.merge_ms_sum += merge_ms;
+    stats_.merge_ms_max = std::max(stats_.merge_ms_max, double(merge_ms));
+    stats_.version_bytes_sent += message.size() * membership_.others().size();
   }
 
   // ---- state ---------------------------------------------------------------------------------

@@ -1,7 +1,8 @@
 // The `csculpt` program run as a user runs it: merge output bit-identical to the SDK's
 // merge_meshes, --help of every subcommand, the error contract on bad input (exit code, one
 // `csculpt: error:` line naming the file and the problem, no output file left behind), the
-// JSON of `hierarchy`, `diff`, `scenarios --json` and `bench merge`.
+// JSON of `hierarchy`, `diff`, `scenarios --json`, `bench merge` and `bench session`, and the
+// demo: a real two-peer session that converges with no lost edit and writes attribution colours.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -203,13 +204,16 @@ TEST_F(Cli, MergeWritesExactlyWhatMergeMeshesComputes) {
 
 TEST_F(Cli, HelpWorksForEverySubcommand) {
   const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
-      {"--help", {"merge", "hierarchy", "diff", "scenarios", "bench"}},
+      {"--help", {"merge", "hierarchy", "diff", "scenarios", "demo", "bench"}},
       {"merge --help", {"--method", "--k", "-o", "--out", "base", "edits"}},
       {"hierarchy --help", {"--k", "mesh"}},
       {"diff --help", {"base", "edited"}},
       {"scenarios --help", {"--faces", "--json"}},
       {"bench --help", {"merge"}},
       {"bench merge --help", {"--faces", "--users", "--repeat", "--method", "--k"}},
+      {"demo --help",
+       {"--peers", "--seconds", "--faces", "--sync-ms", "--out", "--seed", "--strokes-per-second"}},
+      {"bench session --help", {"--faces", "--peers", "--sync-ms", "--samples"}},
   };
   for (const auto& [args, mentions] : cases) {
     const Result r = run(args);
@@ -447,6 +451,79 @@ TEST_F(Cli, BenchMergePrintsOneJsonLine) {
   EXPECT_GT(json_number(r.out, "levels"), 1.0) << r.out;
   EXPECT_GT(json_number(r.out, "edited_fraction"), 0.0) << r.out;
   EXPECT_LE(json_number(r.out, "edited_fraction"), 1.0) << r.out;
+}
+
+// ---- demo and bench session: real peer sessions over loopback ------------------------------
+
+TEST_F(Cli, DemoRunsASessionThatConvergesAndWritesAttribution) {
+  const std::string out = path("merged.ply");
+  const Result r = run("demo --faces 5000 --seconds 2 --sync-ms 50 --seed 3 -o " + quote(out));
+  EXPECT_EQ(r.code, 0) << r.err;
+  const std::vector<std::string> lines = lines_of(r.out);
+  ASSERT_FALSE(lines.empty()) << r.err;
+  const std::string& summary = lines.back();  // the last line on stdout is the summary
+  ASSERT_FALSE(summary.empty());
+  EXPECT_EQ(summary.front(), '{') << summary;
+  EXPECT_EQ(summary.back(), '}') << summary;
+  EXPECT_NE(summary.find("\"converged\":true"), std::string::npos) << summary << "\n" << r.err;
+  EXPECT_EQ(json_number(summary, "lost_edits"), 0.0) << summary;
+  EXPECT_EQ(json_number(summary, "peers"), 2.0) << summary;
+  EXPECT_GT(json_number(summary, "strokes"), 0.0) << summary;
+  EXPECT_GT(json_number(summary, "merges"), 0.0) << summary;
+  EXPECT_GT(json_number(summary, "bytes_per_stroke"), 0.0) << summary;
+  EXPECT_EQ(json_number(summary, "messages_dropped"), 0.0) << summary;
+  const double merge_mean = json_number(summary, "merge_ms_mean");
+  EXPECT_TRUE(merge_mean > 0 && merge_mean <= json_number(summary, "merge_ms_max")) << summary;
+  const double conflicting = json_number(summary, "conflicting_edits");
+  EXPECT_TRUE(conflicting >= 0 && conflicting <= json_number(summary, "strokes")) << summary;
+  // a live line per merge on stderr
+  EXPECT_NE(r.err.find("version 1 by A: merge"), std::string::npos) << r.err;
+
+  // The final mesh: the session's sphere with its materials and the attribution colours.
+  const Mesh m = read_mesh(out);
+  const Mesh sphere = make_sphere(5000, true);
+  ASSERT_EQ(m.vertex_count(), sphere.vertex_count());
+  EXPECT_EQ(m.triangles, sphere.triangles);
+  EXPECT_GE(m.find_channel("albedo"), 0);
+  const int a = m.find_channel("attribution");
+  ASSERT_GE(a, 0) << "no attribution channel";
+  const Channel& c = m.channels[static_cast<std::size_t>(a)];
+  ASSERT_EQ(c.desc.width, 3u);
+  ASSERT_EQ(c.values.size(), 3 * m.vertex_count());
+  // Peer A's hue is green, B's blue (both: cyan); the edits moved the sphere.
+  std::size_t greener = 0, bluer = 0;
+  double moved = 0;
+  for (std::size_t v = 0; v < m.vertex_count(); ++v) {
+    const float* rgb = c.values.data() + 3 * v;
+    for (int k = 0; k < 3; ++k) ASSERT_TRUE(rgb[k] >= 0.f && rgb[k] <= 1.f) << v;
+    greener += rgb[1] > rgb[2] + 0.2f;
+    bluer += rgb[2] > rgb[1] + 0.2f;
+    const Vec3f &p = m.positions[v], &q = sphere.positions[v];
+    moved = std::max(moved, std::hypot(double(p.x - q.x), double(p.y - q.y), double(p.z - q.z)));
+  }
+  EXPECT_GT(greener, 0u) << "nothing attributed to A alone";
+  EXPECT_GT(bluer, 0u) << "nothing attributed to B alone";
+  EXPECT_GT(moved, 0.01);
+}
+
+TEST_F(Cli, BenchSessionPrintsOneJsonLinePerPeerCount) {
+  const Result r = run("bench session --faces 2000 --peers 2,3 --samples 5 --sync-ms 20");
+  EXPECT_EQ(r.code, 0) << r.err;
+  const std::vector<std::string> lines = lines_of(r.out);
+  ASSERT_EQ(lines.size(), 2u) << r.out << r.err;
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    const std::string& l = lines[i];
+    EXPECT_EQ(json_number(l, "peers"), double(i + 2)) << l;
+    EXPECT_EQ(json_number(l, "samples"), 5.0) << l;
+    EXPECT_EQ(json_number(l, "sync_ms"), 20.0) << l;
+    EXPECT_EQ(json_number(l, "faces"), double(make_sphere(2000).face_count())) << l;
+    EXPECT_EQ(json_number(l, "failed"), 0.0) << l;
+    const double p50 = json_number(l, "e2e_ms_p50"), p90 = json_number(l, "e2e_ms_p90"),
+                 max = json_number(l, "e2e_ms_max");
+    EXPECT_TRUE(p50 > 0 && p50 <= p90 && p90 <= max) << l;
+    EXPECT_GE(json_number(l, "merge_ms_p50"), 0.0) << l;
+    EXPECT_GT(json_number(l, "bytes_per_stroke"), 0.0) << l;
+  }
 }
 
 }  // namespace
