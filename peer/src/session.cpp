@@ -1254,6 +1254,60 @@ class Node {
 
 // ---- host side --------------------------------------------------------------------------------
 
+namespace {
+
+/// Whether `width`-wide `local` equals `base` with `change` applied (bitwise), without making
+/// that state: memcmp of the runs between changed vertices.
+bool equals_with(const float* base, const float* local, std::size_t vertices, std::uint32_t width,
+                 const AttributeDiff* change) {
+  std::size_t v = 0;
+  const std::size_t row = std::size_t{width} * sizeof(float);
+  if (change) {
+    for (std::size_t i = 0; i < change->indices.size(); ++i) {
+      const std::size_t at = change->indices[i];
+      if (std::memcmp(base + v * width, local + v * width, (at - v) * row) != 0) return false;
+      if (std::memcmp(change->values.data() + i * width, local + at * width, row) != 0)
+        return false;
+      v = at + 1;
+    }
+  }
+  return std::memcmp(base + v * width, local + v * width, (vertices - v) * row) == 0;
+}
+
+bool same_layout(const Mesh& base, const Mesh& local) {
+  if (local.vertex_count() != base.vertex_count() || local.channels.size() != base.channels.size())
+    return false;
+  for (std::size_t c = 0; c < base.channels.size(); ++c)
+    if (local.channels[c].values.size() != base.channels[c].values.size()) return false;
+  return true;
+}
+
+bool equals_base_plus(const Mesh& base, const Diff* d, const Mesh& local) {
+  const std::size_t n = base.vertex_count();
+  if (!equals_with(reinterpret_cast<const float*>(base.positions.data()),
+                   reinterpret_cast<const float*>(local.positions.data()), n, 3,
+                   d ? &d->positions : nullptr))
+    return false;
+  for (std::size_t c = 0; c < base.channels.size(); ++c)
+    if (!equals_with(base.channels[c].values.data(), local.channels[c].values.data(), n,
+                     base.channels[c].desc.width, d ? &d->channels[c].change : nullptr))
+      return false;
+  return true;
+}
+
+/// Puts the vertices `d` changes back to their values in `base`.
+void restore(const Mesh& base, const Diff& d, Mesh& local) {
+  for (std::uint32_t v : d.positions.indices) local.positions[v] = base.positions[v];
+  for (std::size_t c = 0; c < d.channels.size(); ++c) {
+    const std::uint32_t w = d.channels[c].desc.width;
+    for (std::uint32_t v : d.channels[c].change.indices)
+      std::copy_n(base.channels[c].values.data() + std::size_t{w} * v, w,
+                  local.channels[c].values.data() + std::size_t{w} * v);
+  }
+}
+
+}  // namespace
+
 struct Session::Impl {
   std::unique_ptr<Node> node;
   SessionOptions options;
@@ -1355,13 +1409,7 @@ bool Session::submit(Mesh& local, std::uint32_t strokes) {
   Diff sent = decode_diff(bytes, s.base);
   // The host's values become what the peers receive: changed vertices the quantisation left
   // out go back to the base, the others to their decoded values.
-  for (std::uint32_t v : d.positions.indices) local.positions[v] = s.base.positions[v];
-  for (std::size_t c = 0; c < d.channels.size(); ++c) {
-    const std::uint32_t w = d.channels[c].desc.width;
-    for (std::uint32_t v : d.channels[c].change.indices)
-      std::copy_n(s.base.channels[c].values.data() + std::size_t{w} * v, w,
-                  local.channels[c].values.data() + std::size_t{w} * v);
-  }
+  restore(s.base, d, local);
   apply_diff(sent, local);
   s.last_submit_digest = digest(capture_diff(s.base, local));
   s.strokes_at[header.sequence] = s.unacknowledged_strokes;
@@ -1415,26 +1463,30 @@ std::size_t Session::update(Mesh& local) {
           if (auto st = s.strokes_at.find(seq); st != s.strokes_at.end())
             s.unacknowledged_strokes -= std::min(s.unacknowledged_strokes, st->second);
         }
-    Mesh sent_state = s.base;
-    if (ours) apply_diff(*ours, sent_state);
-    Mesh next = s.base;
-    apply_diff(item.merged, next);
-    const Diff mine = local.positions.empty() ? Diff{} : capture_diff(sent_state, local);
-    const bool no_local_edits =
-        mine.positions.empty() && std::all_of(mine.channels.begin(), mine.channels.end(),
-                                              [](const auto& c) { return c.change.empty(); });
-    if (no_local_edits || local.positions.empty()) {
-      local = next;
+    if (!local.positions.empty() && !same_layout(s.base, local))
+      throw InvalidInput("update: the local mesh's vertices or channels differ from the session's");
+    if (local.positions.empty() || equals_base_plus(s.base, ours, local)) {
+      // No edits since the submit (the common case): local = base + ours becomes the new
+      // version sparsely: our submitted vertices back to the base, then the merged diff.
+      if (!local.positions.empty()) {
+        if (ours) restore(s.base, *ours, local);
+        apply_diff(item.merged, local);
+      }
+      apply_diff(item.merged, s.base);
+      if (local.positions.empty()) local = s.base;
     } else {
-      // Edits made since the submit: merged with what the version changed relative to S.
-      const Diff theirs = capture_diff(sent_state, next);
+      // Edits made since the submit: merged with what the version changed relative to S, the
+      // state the submit described.
+      Mesh sent_state = s.base;
+      if (ours) apply_diff(*ours, sent_state);
+      apply_diff(item.merged, s.base);
+      const Diff theirs = capture_diff(sent_state, s.base);
+      const Diff mine = capture_diff(sent_state, local);
       const Diff* both[2] = {&theirs, &mine};
-      Mesh rebased = sent_state;
-      apply_diff(s.merger->merge(sent_state, both, MergeMethod::full, s.frame), rebased);
-      local = std::move(rebased);
+      local = sent_state;
+      apply_diff(s.merger->merge(sent_state, both, MergeMethod::full, s.frame), local);
       ++s.rebases;
     }
-    s.base = std::move(next);
     s.version = item.version;
     s.submitted.clear();
     s.strokes_at.clear();
