@@ -1,18 +1,374 @@
 #include "peer_command.h"
 
+#include <poll.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
 #include <cstdio>
+#include <string>
+#include <string_view>
+#include <thread>
+
+#include "artist.h"
+#include "csculpt/error.h"
+#include "csculpt/generate.h"
+#include "csculpt/io.h"
+#include "csculpt/peer/session.h"
 
 namespace csculpt::cli {
+namespace {
 
-CLI::App* add_peer_command(CLI::App& app, PeerCommandOptions& o) {
-  CLI::App* peer = app.add_subcommand("peer", "one simulated artist in a session (in progress)");
-  peer->add_option("--join", o.join, "invite of the session to join");
-  return peer;
+// Set by SIGINT/SIGTERM: the peer leaves cleanly and prints its summary.
+volatile std::sig_atomic_t g_signalled = 0;
+void on_signal(int) {
+  g_signalled = 1;
 }
 
-int run_peer(const PeerCommandOptions&) {
-  std::fprintf(stderr, "csculpt peer: not built yet\n");
-  return 2;
+std::string json_string(std::string_view s) {
+  std::string out = "\"";
+  for (const char c : s) {
+    switch (c) {
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
+      default:
+        if (static_cast<unsigned char>(c) < 0x20) {
+          char buf[8];
+          std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(c));
+          out += buf;
+        } else {
+          out += c;
+        }
+    }
+  }
+  return out + "\"";
+}
+
+std::string hex64(std::uint64_t v) {
+  char buf[24];
+  std::snprintf(buf, sizeof buf, "\"%016llx\"", static_cast<unsigned long long>(v));
+  return buf;
+}
+
+/// Wall-clock milliseconds: a driving script compares them with its own clock (time.time()),
+/// e.g. to measure how long after a SIGKILL a survivor saw the new merger.
+std::string now_ms() {
+  const auto t = std::chrono::system_clock::now().time_since_epoch();
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3f", std::chrono::duration<double, std::milli>(t).count());
+  return buf;
+}
+
+/// One JSON object per line, flushed at once (the reader is usually a pipe).
+class Line {
+ public:
+  explicit Line(std::string_view event) : text_("{\"event\":" + json_string(event)) {}
+  Line& num(std::string_view key, std::uint64_t v) { return raw(key, std::to_string(v)); }
+  Line& real(std::string_view key, double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.3f", v);
+    return raw(key, buf);
+  }
+  Line& str(std::string_view key, std::string_view v) { return raw(key, json_string(v)); }
+  Line& raw(std::string_view key, std::string_view v) {
+    text_ += ",";
+    text_ += json_string(key);
+    text_ += ":";
+    text_ += v;
+    return *this;
+  }
+  void emit() {
+    text_ += "}\n";
+    std::fputs(text_.c_str(), stdout);
+    std::fflush(stdout);
+  }
+
+ private:
+  std::string text_;
+};
+
+/// Reads stdin without blocking: a line `quit` or end of file asks the peer to finish.
+class StdinWatch {
+ public:
+  bool quit_requested() {
+    if (eof_) return true;
+    pollfd p{0, POLLIN, 0};
+    while (::poll(&p, 1, 0) > 0 && (p.revents & (POLLIN | POLLHUP | POLLERR))) {
+      char buf[512];
+      const ssize_t n = ::read(0, buf, sizeof buf);
+      if (n <= 0) {
+        eof_ = true;
+        return true;
+      }
+      pending_.append(buf, static_cast<std::size_t>(n));
+      for (std::size_t nl; (nl = pending_.find('\n')) != std::string::npos;) {
+        std::string line = pending_.substr(0, nl);
+        pending_.erase(0, nl + 1);
+        while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
+        if (line == "quit") quit_ = true;
+      }
+      if (quit_) return true;
+    }
+    return quit_;
+  }
+
+ private:
+  std::string pending_;
+  bool eof_ = false, quit_ = false;
+};
+
+std::string_view kind_name(peer::EventKind k) {
+  switch (k) {
+    case peer::EventKind::joined:
+      return "joined";
+    case peer::EventKind::version:
+      return "version";
+    case peer::EventKind::peer_joined:
+      return "peer_joined";
+    case peer::EventKind::peer_evasive:
+      return "peer_evasive";
+    case peer::EventKind::peer_left:
+      return "peer_left";
+    case peer::EventKind::merger_changed:
+      return "merger_changed";
+    case peer::EventKind::dropped:
+      return "dropped";
+    case peer::EventKind::error:
+      return "error";
+  }
+  return "unknown";
+}
+
+/// What a state line reports; a line is printed whenever any of it changes.
+struct State {
+  std::uint64_t version = 0, digest = 0, base_digest = 0, strokes = 0, unacknowledged = 0,
+                acknowledged = 0, dropped = 0, stale = 0, auth_rejected = 0, merger = 0, epoch = 0,
+                members = 0;
+  bool editing = false;
+  friend bool operator==(const State&, const State&) = default;
+};
+
+}  // namespace
+
+CLI::App* add_peer_command(CLI::App& app, PeerCommandOptions& o) {
+  CLI::App* p = app.add_subcommand(
+      "peer",
+      "one simulated artist in a serverless session, as its own process (JSON lines on stdout: "
+      "invite, events, state changes, summary)");
+  p->add_option("--join", o.join, "invite of the session to join (else create one)");
+  p->add_option("--faces", o.faces, "faces of the built-in sphere of a new session")
+      ->capture_default_str()
+      ->check(CLI::Range(20u, 50000000u));
+  p->add_option("--id", o.id, "peer id, > 0 (the live peer with the lowest id merges); 0: random")
+      ->capture_default_str();
+  p->add_option("--name", o.name, "name shown to the others (default peer-<id>)");
+  p->add_option("--bind", o.bind, "ZeroMQ endpoint to listen on (port * picks a free one)")
+      ->capture_default_str();
+  p->add_option("--sync-ms", o.sync_ms, "merge and submit interval")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 3600000u));
+  p->add_option("--heartbeat-ms", o.heartbeat_ms, "heartbeat interval")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 3600000u));
+  p->add_option("--evasive-ms", o.evasive_ms, "silence after which a peer is reported evasive")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 3600000u));
+  p->add_option("--expired-ms", o.expired_ms,
+                "silence after which a peer is gone (and a new merger elected)")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 3600000u));
+  p->add_option("--join-timeout-ms", o.join_timeout_ms, "how long to wait for the snapshot")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 3600000u));
+  p->add_option("--seconds", o.seconds, "how long to make strokes")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1e6));
+  p->add_option("--strokes-per-second", o.strokes_per_second, "stroke rate while editing")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1000.0));
+  p->add_option("--seed", o.seed, "stroke script seed")->capture_default_str();
+  p->add_option("--linger", o.linger,
+                "seconds to keep syncing after editing stops; a line 'quit' or end of file on "
+                "stdin ends the run earlier")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1e6));
+  p->add_flag("--ignore-stdin", o.ignore_stdin,
+              "do not read stdin (run for --seconds + --linger regardless)");
+  p->add_option("--out", o.out, "final mesh to write (PLY/OBJ; PLY keeps an attribution channel)");
+  return p;
+}
+
+int run_peer(const PeerCommandOptions& o) {
+  try {
+    if (o.evasive_ms >= o.expired_ms) throw InvalidInput("--evasive-ms must be below --expired-ms");
+    std::signal(SIGINT, on_signal);
+    std::signal(SIGTERM, on_signal);
+    std::signal(SIGPIPE, SIG_IGN);  // the driver may stop reading: keep going, leave cleanly
+
+    peer::SessionOptions so;
+    so.id = o.id;
+    so.bind = o.bind;
+    so.sync = peer::Millis{o.sync_ms};
+    so.membership = {peer::Millis{o.heartbeat_ms}, peer::Millis{o.evasive_ms},
+                     peer::Millis{o.expired_ms}};
+    so.name = o.name.empty() ? (o.id ? "peer-" + std::to_string(o.id) : "peer") : o.name;
+
+    std::unique_ptr<peer::Session> session =
+        o.join.empty() ? peer::Session::create(make_sphere(o.faces, true), so)
+                       : peer::Session::join(o.join, so, peer::Millis{o.join_timeout_ms});
+    const peer::PeerId self = session->id();
+    Line("invite")
+        .str("invite", session->invite())
+        .num("id", self)
+        .str("endpoint", session->endpoint())
+        .num("version", session->version())
+        .num("vertices", session->base().vertex_count())
+        .raw("t", now_ms())
+        .emit();
+
+    ArtistOptions ao;
+    ao.seed = o.seed;
+    ao.strokes_per_second = o.strokes_per_second;
+    ao.submit_every = so.sync;
+    SimulatedArtist artist(*session, ao);
+    StdinWatch input;
+
+    const auto start = peer::Clock::now();
+    const auto edit_end = start + std::chrono::duration_cast<peer::Clock::duration>(
+                                      std::chrono::duration<double>(o.seconds));
+    const auto linger_end = edit_end + std::chrono::duration_cast<peer::Clock::duration>(
+                                           std::chrono::duration<double>(o.linger));
+    State last;
+    bool first_state = true;
+    while (true) {
+      const auto now = peer::Clock::now();
+      const bool quit = g_signalled || (!o.ignore_stdin && input.quit_requested());
+      const bool editing = !quit && now < edit_end;
+      artist.step(now, editing);
+
+      for (const peer::Event& e : session->poll_events()) {
+        Line line(kind_name(e.kind));
+        line.num("id", self).raw("t", now_ms());
+        switch (e.kind) {
+          case peer::EventKind::version:
+            line.num("version", e.version)
+                .num("merger", e.peer)
+                .num("epoch", e.epoch)
+                .raw("digest", hex64(peer::mesh_digest(artist.local())));
+            break;
+          case peer::EventKind::merger_changed:
+            line.num("merger", e.peer).num("epoch", e.epoch).num("version", e.version);
+            break;
+          case peer::EventKind::dropped:
+          case peer::EventKind::error:
+            line.str("reason", e.message).num("version", e.version);
+            break;
+          default:
+            line.num("peer", e.peer).num("version", e.version).str("detail", e.message);
+        }
+        line.emit();
+      }
+
+      const peer::SessionStats st = session->stats();
+      State s;
+      s.version = session->version();
+      s.digest = peer::mesh_digest(artist.local());
+      s.base_digest = peer::mesh_digest(session->base());
+      s.strokes = artist.strokes();
+      s.unacknowledged = artist.unacknowledged();
+      s.acknowledged = st.strokes_acknowledged;
+      s.dropped = st.messages_dropped;
+      s.stale = st.stale_ignored;
+      s.auth_rejected = st.auth_rejected;
+      s.merger = st.merger;
+      s.epoch = st.epoch;
+      s.members = st.members;
+      s.editing = editing;
+      if (first_state || !(s == last)) {
+        first_state = false;
+        last = s;
+        Line("state")
+            .num("id", self)
+            .raw("t", now_ms())
+            .num("version", s.version)
+            .raw("digest", hex64(s.digest))
+            .raw("base_digest", hex64(s.base_digest))
+            .num("strokes", s.strokes)
+            .num("unacknowledged", s.unacknowledged)
+            .num("acknowledged", s.acknowledged)
+            .num("messages_dropped", s.dropped)
+            .num("stale_ignored", s.stale)
+            .num("auth_rejected", s.auth_rejected)
+            .num("merger", s.merger)
+            .num("epoch", s.epoch)
+            .num("members", s.members)
+            .raw("editing", editing ? "true" : "false")
+            .emit();
+      }
+      if (quit || now >= linger_end) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(3));
+    }
+
+    // The summary describes the state at the end of editing and syncing; leaving then tells
+    // the others at once rather than letting them wait for the expiry threshold.
+    const peer::SessionStats st = session->stats();
+    const Mesh& local = artist.local();
+    const std::uint64_t lost = artist.unacknowledged();
+    if (!o.out.empty()) {
+      Mesh out = local;
+      Channel colours;
+      colours.desc = ChannelDesc{"attribution", 3, Linearisation::identity, 0.f, 1.f};
+      colours.values = peer::attribution_colours(session->attribution(), local.vertex_count());
+      out.channels.push_back(std::move(colours));
+      write_mesh(out, o.out);
+    }
+    const double seconds = std::chrono::duration<double>(peer::Clock::now() - start).count();
+    Line("summary")
+        .num("id", self)
+        .raw("t", now_ms())
+        .num("version", session->version())
+        .raw("digest", hex64(peer::mesh_digest(local)))
+        .raw("base_digest", hex64(peer::mesh_digest(session->base())))
+        .num("strokes", artist.strokes())
+        .num("strokes_submitted", st.strokes_submitted)
+        .num("acknowledged", st.strokes_acknowledged)
+        .num("lost_edits", lost)
+        .num("submits", st.submits)
+        .num("submit_bytes", st.submit_bytes)
+        .num("versions_applied", st.versions_applied)
+        .num("rebases", st.rebases)
+        .num("merges", st.merges)
+        .num("merged_strokes", st.merged_strokes)
+        .num("conflicting_strokes", st.conflicting_strokes)
+        .real("merge_ms_max", st.merge_ms_max)
+        .real("merge_ms_mean", st.merges ? st.merge_ms_sum / double(st.merges) : 0.0)
+        .num("version_bytes_sent", st.version_bytes_sent)
+        .num("messages_received", st.messages_received)
+        .num("bytes_received", st.bytes_received)
+        .num("messages_dropped", st.messages_dropped)
+        .num("stale_ignored", st.stale_ignored)
+        .num("auth_rejected", st.auth_rejected)
+        .num("snapshots_sent", st.snapshots_sent)
+        .num("fetches", st.fetches)
+        .num("epoch", st.epoch)
+        .num("merger", st.merger)
+        .num("members", st.members)
+        .real("seconds", seconds)
+        .emit();
+    session->leave();
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "csculpt peer: error: %s\n", e.what());
+    return 1;
+  }
 }
 
 }  // namespace csculpt::cli

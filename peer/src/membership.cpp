@@ -98,8 +98,10 @@ Election::Decision Election::update(const Membership& membership) {
 Election::Outcome Election::on_announcement(std::uint64_t epoch, PeerId claimant,
                                             const Membership& membership) {
   Outcome o;
-  // A claimant we do not know, or know to be dead, is not followed (forged or stale).
-  if (!membership.contains(claimant)) return o;
+  // A claimant we do not know, or know to be dead, is not followed (forged or stale). Epochs
+  // grow by one per election (or one past a claim when re-asserting): one at 2^62 or beyond is
+  // forged, and refusing it keeps every increment far from wrapping around.
+  if (!membership.contains(claimant) || epoch >= kMaxEpoch) return o;
   if (merger_ == claimant) {
     epoch_ = std::max(epoch_, epoch);
     return o;

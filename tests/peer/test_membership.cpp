@@ -113,4 +113,20 @@ TEST(Election, AForgedHigherEpochFromAHigherIdDoesNotDisplaceALiveMerger) {
   EXPECT_TRUE(e3.is_merger());
 }
 
+TEST(Election, ForgedEpochsNearTheTopAreRefusedSoElectionsNeverWrap) {
+  const Clock::time_point t0{};
+  Membership m(5, "a", thresholds());
+  m.heard(3, "b", t0);
+  Election e(5);
+  ASSERT_TRUE(e.on_announcement(1, 3, m).followed);
+  // A third party names our merger with the largest epoch: nothing changes.
+  e.on_announcement(~std::uint64_t{0}, 3, m);
+  e.on_announcement(Election::kMaxEpoch, 3, m);
+  EXPECT_EQ(e.epoch(), 1u);
+  // The merger dies: the next epoch follows the real one.
+  m.tick(t0 + 700ms);
+  ASSERT_TRUE(e.update(m).announce);
+  EXPECT_EQ(e.epoch(), 2u);
+}
+
 }  // namespace

@@ -95,6 +95,9 @@ class Election {
   /// A claim by `claimant` to merge `epoch`.
   Outcome on_announcement(std::uint64_t epoch, PeerId claimant, const Membership& membership);
 
+  /// Claims of this epoch or beyond are refused as forged (no session holds 2^62 elections).
+  static constexpr std::uint64_t kMaxEpoch = std::uint64_t{1} << 62;
+
   /// Whether a message of `epoch` about merging (versions, elections) is stale.
   bool is_stale(std::uint64_t epoch) const { return epoch < epoch_; }
 
