@@ -3,6 +3,8 @@
 // together touch about 15% of the vertices.
 #include "bench_merge.h"
 
+#include "bench_stats.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -17,16 +19,7 @@
 namespace csculpt::cli {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v[v.size() / 2];
-}
-
-double ms(Clock::time_point a, Clock::time_point b) {
-  return std::chrono::duration<double, std::milli>(b - a).count();
-}
+using Clock = BenchClock;
 
 }  // namespace
 
@@ -41,7 +34,7 @@ int bench_merge(const BenchMergeOptions& o) {
   for (int i = 0; i < 3; ++i) {
     const auto t0 = Clock::now();
     Hierarchy h = Hierarchy::build(base, ho);
-    hierarchy_ms.push_back(ms(t0, Clock::now()));
+    hierarchy_ms.push_back(ms_between(t0, Clock::now()));
   }
 
   // Each user: strokes from its own seed until its edit touches the target fraction.
@@ -94,9 +87,9 @@ int bench_merge(const BenchMergeOptions& o) {
     sink = sink + acc;
     auto t4 = Clock::now();
     if (r == 0) continue;
-    capture_ms.push_back(ms(t0, t1) / o.users);
-    merge_ms.push_back(ms(t1, t2));
-    stream_ms.push_back(ms(t3, t4));
+    capture_ms.push_back(ms_between(t0, t1) / o.users);
+    merge_ms.push_back(ms_between(t1, t2));
+    stream_ms.push_back(ms_between(t3, t4));
     iso_ms.push_back(t.isometry_ms);
     dec_ms.push_back(t.decompose_ms);
     blend_ms.push_back(t.blend_ms);

@@ -6,6 +6,8 @@
 // wait for the merger's next tick is measured as an artist would meet it.
 #include "bench_session.h"
 
+#include "bench_stats.h"
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -26,16 +28,6 @@ namespace {
 
 using peer::Clock;
 using peer::Millis;
-
-double ms_between(Clock::time_point a, Clock::time_point b) {
-  return std::chrono::duration<double, std::milli>(b - a).count();
-}
-
-double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
-}
 
 struct SubmitRecord {
   std::uint64_t request = 0;

@@ -3,6 +3,8 @@
 // stroke, the target is <= 60 KB for 10,000 vertices at <= 1e-5 of the diagonal.
 #include "bench_wire.h"
 
+#include "bench_stats.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -17,16 +19,7 @@
 namespace csculpt::cli {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v[v.size() / 2];
-}
-
-double ms(Clock::time_point a, Clock::time_point b) {
-  return std::chrono::duration<double, std::milli>(b - a).count();
-}
+using Clock = BenchClock;
 
 struct Case {
   const char* name;
@@ -84,8 +77,8 @@ int bench_wire(const BenchWireOptions& o) {
       decoded = decode_diff(bytes, base);
       const auto t2 = Clock::now();
       if (r == 0) continue;
-      encode_ms.push_back(ms(t0, t1));
-      decode_ms.push_back(ms(t1, t2));
+      encode_ms.push_back(ms_between(t0, t1));
+      decode_ms.push_back(ms_between(t1, t2));
     }
     // Largest position error of the decoded diff against the edit, relative to the diagonal.
     Mesh received = base;
