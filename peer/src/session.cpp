@@ -546,7 +546,6 @@ class Node {
       zmq::pollitem_t items[] = {{router_.handle(), 0, ZMQ_POLLIN, 0},
                                  {zap_.handle(), 0, ZMQ_POLLIN, 0}};
       zmq::poll(items, 2, std::chrono::milliseconds(2));
-      const auto now = Clock::now();
       if (items[1].revents & ZMQ_POLLIN) serve_zap();
       for (int i = 0; i < 1000 && (items[0].revents & ZMQ_POLLIN); ++i) {
         zmq::message_t routing, payload;
@@ -557,7 +556,9 @@ class Node {
           zmq::message_t extra;
           if (!router_.recv(extra, zmq::recv_flags::dontwait)) break;
         }
-        handle(routing, payload, now);
+        // Stamped when handled, not when the poll returned: a message handled after a long
+        // step (a snapshot's hierarchy build, a large merge) is recent, not stale.
+        handle(routing, payload, Clock::now());
       }
       std::deque<Command> commands;
       {
@@ -573,6 +574,7 @@ class Node {
         send_own_submit();
       }
       if (leaving) break;
+      const auto now = Clock::now();
       if (now >= next_heartbeat) {
         next_heartbeat = now + options_.membership.heartbeat;
         heartbeat(now);
