@@ -18,6 +18,7 @@
 
 #include "csculpt/dual_quat.h"
 #include "csculpt/error.h"
+#include "dq_simd.h"
 #include "vertex_isometry_kernel.h"
 #include "worker_pool.h"
 
@@ -41,11 +42,51 @@ constexpr std::array<MergeMethod, 8> kMethods = {MergeMethod::full,
 // ---------------------------------------------------------------------------------------
 // The two algebras the pipeline runs on.
 
-/// Unit dual quaternions (positions in the isometry methods).
+/// Unit dual quaternions (positions in the isometry methods). On SSE2 the arithmetic runs
+/// on registers (dq_simd.h), bit-identical to the scalar dual_quat.h operations.
 struct DqOps {
   using Value = DualQuat;
   static Value identity() { return DualQuat::identity(); }
   static Value zero() { return {{0, 0, 0, 0}, {0, 0, 0, 0}}; }
+#if defined(__SSE2__)
+  static void add(Value& acc, float w, const Value& q) {
+    detail::DQv a = detail::dq_load(acc);
+    detail::dq_add_scaled(a, w, detail::dq_load(q));
+    detail::dq_store(acc, a);
+  }
+  static void add_offset(Value& acc, float w, const Value& q) {
+    detail::DQv a = detail::dq_load(acc);
+    detail::dq_add_scaled_offset(a, w, detail::dq_load(q));
+    detail::dq_store(acc, a);
+  }
+  /// Average of all children: the absent ones (identity) weigh total - listed.
+  static Value finish_average(const Value& acc, float total_weight) {
+    using namespace detail;
+    return dq_value(dq_canonical(dq_normalized(dq_add_real_w(dq_load(acc), total_weight))));
+  }
+  static Value residual(const Value& parent, const Value& node) {
+    using namespace detail;
+    return dq_value(dq_canonical(dq_inverse_mul(dq_load(parent), dq_load(node))));
+  }
+  static Value compose(const Value& parent, const Value& residual) {
+    using namespace detail;
+    return dq_value(dq_canonical(dq_mul(dq_load(parent), dq_load(residual))));
+  }
+  static float magnitude(const Value& q) { return detail::dq_magnitude(detail::dq_load(q)); }
+  static Value finish_blend(const Value& acc, float magnitude_sum, std::uint32_t /*users*/) {
+    using namespace detail;
+    if (!(magnitude_sum > 0)) return identity();
+    return dq_value(dq_canonical(dq_normalized(dq_load(acc))));
+  }
+  /// 1 + the sum of offsets (q - 1) that add_offset accumulated into zero(), normalised
+  static Value compose_offsets(const Value& acc) {
+    using namespace detail;
+    return dq_value(dq_canonical(dq_normalized(dq_add_real_w(dq_load(acc), 1.f))));
+  }
+  static float distance(const Value& a, const Value& b) {
+    return detail::dq_distance(detail::dq_load(a), detail::dq_load(b));
+  }
+#else
   static void add(Value& acc, float w, const Value& q) { add_scaled(acc, w, q); }
   static void add_offset(Value& acc, float w, const Value& q) { add_scaled_offset(acc, w, q); }
   /// Average of all children: the absent ones (identity) weigh total - listed.
@@ -73,6 +114,7 @@ struct DqOps {
     const Quat dr = a.real - b.real, dd = a.dual - b.dual;
     return std::sqrt(dot(dr, dr) + dot(dd, dd));
   }
+#endif
 };
 
 /// How translations of several diffs combine at a node.
