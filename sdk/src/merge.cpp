@@ -42,75 +42,73 @@ constexpr std::array<MergeMethod, 8> kMethods = {MergeMethod::full,
 // ---------------------------------------------------------------------------------------
 // The two algebras the pipeline runs on.
 
-/// Unit dual quaternions (positions in the isometry methods). On SSE2 the arithmetic runs
-/// on registers (dq_simd.h), bit-identical to the scalar dual_quat.h operations.
+/// Unit dual quaternions (positions in the isometry methods). The arithmetic runs on `Reg`:
+/// on SSE2 two registers (dq_simd.h), lane by lane the scalar dual_quat.h operations in the
+/// same order, so both paths give bit-identical results.
 struct DqOps {
   using Value = DualQuat;
-  static Value identity() { return DualQuat::identity(); }
-  static Value zero() { return {{0, 0, 0, 0}, {0, 0, 0, 0}}; }
 #if defined(__SSE2__)
-  static void add(Value& acc, float w, const Value& q) {
-    detail::DQv a = detail::dq_load(acc);
-    detail::dq_add_scaled(a, w, detail::dq_load(q));
-    detail::dq_store(acc, a);
-  }
-  static void add_offset(Value& acc, float w, const Value& q) {
-    detail::DQv a = detail::dq_load(acc);
-    detail::dq_add_scaled_offset(a, w, detail::dq_load(q));
-    detail::dq_store(acc, a);
+  using Reg = detail::DQv;
+  static Reg load(const Value& q) { return detail::dq_load(q); }
+  static void store(Value& out, const Reg& q) { detail::dq_store(out, q); }
+  static Reg identity() { return detail::dq_identity(); }
+  static Reg zero() { return detail::dq_zero(); }
+  static void add(Reg& acc, float w, const Reg& q) { detail::dq_add_scaled(acc, w, q); }
+  static void add_offset(Reg& acc, float w, const Reg& q) {
+    detail::dq_add_scaled_offset(acc, w, q);
   }
   /// Average of all children: the absent ones (identity) weigh total - listed.
-  static Value finish_average(const Value& acc, float total_weight) {
+  static Reg finish_average(const Reg& acc, float total_weight) {
     using namespace detail;
-    return dq_value(dq_canonical(dq_normalized(dq_add_real_w(dq_load(acc), total_weight))));
+    return dq_canonical(dq_normalized(dq_add_real_w(acc, total_weight)));
   }
-  static Value residual(const Value& parent, const Value& node) {
-    using namespace detail;
-    return dq_value(dq_canonical(dq_inverse_mul(dq_load(parent), dq_load(node))));
+  static Reg residual(const Reg& parent, const Reg& node) {
+    return detail::dq_canonical(detail::dq_inverse_mul(parent, node));
   }
-  static Value compose(const Value& parent, const Value& residual) {
-    using namespace detail;
-    return dq_value(dq_canonical(dq_mul(dq_load(parent), dq_load(residual))));
+  static Reg compose(const Reg& parent, const Reg& residual) {
+    return detail::dq_canonical(detail::dq_mul(parent, residual));
   }
-  static float magnitude(const Value& q) { return detail::dq_magnitude(detail::dq_load(q)); }
-  static Value finish_blend(const Value& acc, float magnitude_sum, std::uint32_t /*users*/) {
-    using namespace detail;
+  static float magnitude(const Reg& q) { return detail::dq_magnitude(q); }
+  static Reg finish_blend(const Reg& acc, float magnitude_sum, std::uint32_t /*users*/) {
     if (!(magnitude_sum > 0)) return identity();
-    return dq_value(dq_canonical(dq_normalized(dq_load(acc))));
+    return detail::dq_canonical(detail::dq_normalized(acc));
   }
   /// 1 + the sum of offsets (q - 1) that add_offset accumulated into zero(), normalised
-  static Value compose_offsets(const Value& acc) {
+  static Reg compose_offsets(const Reg& acc) {
     using namespace detail;
-    return dq_value(dq_canonical(dq_normalized(dq_add_real_w(dq_load(acc), 1.f))));
+    return dq_canonical(dq_normalized(dq_add_real_w(acc, 1.f)));
   }
-  static float distance(const Value& a, const Value& b) {
-    return detail::dq_distance(detail::dq_load(a), detail::dq_load(b));
-  }
+  static float distance(const Reg& a, const Reg& b) { return detail::dq_distance(a, b); }
 #else
-  static void add(Value& acc, float w, const Value& q) { add_scaled(acc, w, q); }
-  static void add_offset(Value& acc, float w, const Value& q) { add_scaled_offset(acc, w, q); }
+  using Reg = DualQuat;
+  static Reg load(const Value& q) { return q; }
+  static void store(Value& out, const Reg& q) { out = q; }
+  static Reg identity() { return DualQuat::identity(); }
+  static Reg zero() { return {{0, 0, 0, 0}, {0, 0, 0, 0}}; }
+  static void add(Reg& acc, float w, const Reg& q) { add_scaled(acc, w, q); }
+  static void add_offset(Reg& acc, float w, const Reg& q) { add_scaled_offset(acc, w, q); }
   /// Average of all children: the absent ones (identity) weigh total - listed.
-  static Value finish_average(Value acc, float total_weight) {
+  static Reg finish_average(Reg acc, float total_weight) {
     acc.real.w += total_weight;
     return canonical(normalized(acc));
   }
-  static Value residual(const Value& parent, const Value& node) {
+  static Reg residual(const Reg& parent, const Reg& node) {
     return canonical(inverse(parent) * node);
   }
-  static Value compose(const Value& parent, const Value& residual) {
+  static Reg compose(const Reg& parent, const Reg& residual) {
     return canonical(parent * residual);
   }
-  static float magnitude(const Value& q) { return csculpt::magnitude(q); }
-  static Value finish_blend(const Value& acc, float magnitude_sum, std::uint32_t /*users*/) {
+  static float magnitude(const Reg& q) { return csculpt::magnitude(q); }
+  static Reg finish_blend(const Reg& acc, float magnitude_sum, std::uint32_t /*users*/) {
     if (!(magnitude_sum > 0)) return identity();
     return canonical(normalized(acc));
   }
   /// 1 + the sum of offsets (q - 1) that add_offset accumulated into zero(), normalised
-  static Value compose_offsets(Value acc) {
+  static Reg compose_offsets(Reg acc) {
     acc.real.w += 1.f;
     return canonical(normalized(acc));
   }
-  static float distance(const Value& a, const Value& b) {
+  static float distance(const Reg& a, const Reg& b) {
     const Quat dr = a.real - b.real, dd = a.dual - b.dual;
     return std::sqrt(dot(dr, dr) + dot(dd, dd));
   }
@@ -130,6 +128,9 @@ struct Vec4 {
 template <TranslationBlend Blend>
 struct VecOps {
   using Value = Vec4;
+  using Reg = Vec4;
+  static Reg load(const Value& q) { return q; }
+  static void store(Value& out, const Reg& q) { out = q; }
   static Value identity() { return {}; }
   static Value zero() { return {}; }
   static void add(Value& acc, float w, const Value& q) {
@@ -267,20 +268,33 @@ struct ParentLinks {
   const Hierarchy* hierarchy = nullptr;
   bool tree = false;
 
+  /// One level's links as raw arrays, hoisted out of the per-node loops.
+  struct Level {
+    const std::uint32_t* parent;
+    const float* weight;
+    const std::uint8_t* parent_count;
+    const float* child_weight_sum;  ///< of this level's nodes (tree: child counts)
+    std::size_t stride;
+    bool tree;
+    std::uint32_t count(std::uint32_t node) const { return tree ? 1u : parent_count[node]; }
+    std::uint32_t parent_of(std::uint32_t node, std::uint32_t k) const {
+      return parent[std::size_t{node} * stride + k];
+    }
+    float weight_of(std::uint32_t node, std::uint32_t k) const {
+      return tree ? 1.f : weight[std::size_t{node} * stride + k];
+    }
+  };
+  Level level(std::size_t i) const {
+    const HierarchyLevel& l = hierarchy->levels()[i];
+    return {l.parent.data(),       l.parent_weight.data(),
+            l.parent_count.data(), tree ? l.tree_child_count.data() : l.child_weight_sum.data(),
+            hierarchy->stride(),   tree};
+  }
   std::uint32_t count(std::size_t level, std::uint32_t node) const {
     return tree ? 1u : hierarchy->levels()[level].parent_count[node];
   }
   std::uint32_t parent(std::size_t level, std::uint32_t node, std::uint32_t k) const {
     return hierarchy->levels()[level].parent[std::size_t{node} * hierarchy->stride() + k];
-  }
-  float weight(std::size_t level, std::uint32_t node, std::uint32_t k) const {
-    return tree ? 1.f
-                : hierarchy->levels()[level]
-                      .parent_weight[std::size_t{node} * hierarchy->stride() + k];
-  }
-  float child_weight_sum(std::size_t level, std::uint32_t node) const {
-    const HierarchyLevel& l = hierarchy->levels()[level];
-    return tree ? l.tree_child_count[node] : l.child_weight_sum[node];
   }
 };
 
@@ -289,20 +303,25 @@ struct ParentLinks {
 template <class Ops>
 void decompose(const ParentLinks& links, std::size_t level_count,
                SparsePyramid<typename Ops::Value>& pyramid, std::uint32_t epoch) {
+  using Reg = typename Ops::Reg;
   for (std::size_t i = 0; i + 1 < level_count; ++i) {
     SparseLevel<typename Ops::Value>& fine = pyramid.levels[i];
     SparseLevel<typename Ops::Value>& coarse = pyramid.levels[i + 1];
+    const ParentLinks::Level fl = links.level(i);
     for (std::uint32_t c : fine.list) {
-      const auto& q = fine.val(c);
-      const std::uint32_t n = links.count(i, c);
+      const Reg q = Ops::load(fine.val(c));
+      const std::uint32_t n = fl.count(c);
       for (std::uint32_t k = 0; k < n; ++k) {
-        const std::uint32_t p = links.parent(i, c, k);
-        if (coarse.mark(p, epoch)) coarse.val(p) = Ops::zero();
-        Ops::add_offset(coarse.val(p), links.weight(i, c, k), q);
+        const std::uint32_t p = fl.parent_of(c, k);
+        Reg acc = coarse.mark(p, epoch) ? Ops::zero() : Ops::load(coarse.val(p));
+        Ops::add_offset(acc, fl.weight_of(c, k), q);
+        Ops::store(coarse.val(p), acc);
       }
     }
+    const float* child_weight_sum = links.level(i + 1).child_weight_sum;
     for (std::uint32_t p : coarse.list)
-      coarse.val(p) = Ops::finish_average(coarse.val(p), links.child_weight_sum(i + 1, p));
+      Ops::store(coarse.val(p),
+                 Ops::finish_average(Ops::load(coarse.val(p)), child_weight_sum[p]));
   }
 }
 
@@ -322,9 +341,9 @@ enum class NodeBlend { magnitude, intent };
 constexpr std::size_t kMaxDiffs = 64;
 
 template <class Ops>
-typename Ops::Value blend_residuals(NodeBlend rule, const typename Ops::Value* r, const float* m,
-                                    std::size_t n, std::uint32_t users) {
-  typename Ops::Value acc = Ops::zero();
+typename Ops::Reg blend_residuals(NodeBlend rule, const typename Ops::Reg* r, const float* m,
+                                  std::size_t n, std::uint32_t users) {
+  typename Ops::Reg acc = Ops::zero();
   float magnitude_sum = 0;
   if (rule == NodeBlend::magnitude) {
     for (std::size_t j = 0; j < n; ++j) {
@@ -360,27 +379,42 @@ void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
                            SparsePyramid<typename Ops::Value>& merged, std::uint32_t epoch,
                            NodeBlend rule, detail::WorkerPool& pool) {
   using Value = typename Ops::Value;
+  using Reg = typename Ops::Reg;
+  using Slot = typename SparseLevel<Value>::Slot;
   // The nodes the result needs: ancestors of the vertices some diff changed.
   for (std::size_t i = 0; i + 1 < level_count; ++i) {
     SparseLevel<Value>& coarse = merged.levels[i + 1];
+    const ParentLinks::Level fl = links.level(i);
     for (std::uint32_t c : merged.levels[i].list) {
-      const std::uint32_t n = links.count(i, c);
-      for (std::uint32_t k = 0; k < n; ++k) coarse.mark(links.parent(i, c, k), epoch);
+      const std::uint32_t n = fl.count(c);
+      for (std::uint32_t k = 0; k < n; ++k) coarse.mark(fl.parent_of(c, k), epoch);
     }
   }
   const auto user_count = static_cast<std::uint32_t>(users.size());
+  const std::size_t n_users = users.size();
   for (std::size_t level = level_count; level-- > 0;) {
     SparseLevel<Value>& out = merged.levels[level];
     const bool has_parents = level + 1 < level_count;
+    const ParentLinks::Level fl = links.level(level);
+    // Slot arrays of every diff at this level and at the next coarser one, then the merged
+    // result's coarser level last.
+    const Slot* here[kMaxDiffs];
+    const Slot* coarse[kMaxDiffs + 1];
+    for (std::size_t j = 0; j < n_users; ++j) {
+      here[j] = users[j].levels[level].slots.data();
+      coarse[j] = has_parents ? users[j].levels[level + 1].slots.data() : nullptr;
+    }
+    coarse[n_users] = has_parents ? merged.levels[level + 1].slots.data() : nullptr;
+    Slot* out_slots = out.slots.data();
+    const std::uint32_t* out_list = out.list.data();
     // Each node reads only coarser, finished levels and writes only itself.
     pool.for_chunks(out.list.size(), 2048, [&](std::size_t begin, std::size_t end) {
-      Value residuals[kMaxDiffs];
+      Reg residuals[kMaxDiffs];
       float magnitudes[kMaxDiffs];
-      Value parent_acc[kMaxDiffs + 1];  // the diffs' parent blends, then the merged one
+      Reg parent_acc[kMaxDiffs + 1];  // the diffs' parent blends, then the merged one
       bool parent_any[kMaxDiffs + 1];
-      const std::size_t n_users = users.size();
       for (std::size_t i = begin; i < end; ++i) {
-        const std::uint32_t c = out.list[i];
+        const std::uint32_t c = out_list[i];
         // One pass over the node's parent links serves every diff and the merged result.
         // Sum of w (q - 1) over parents that differ from the identity; the identity's share
         // (the weights' total) is added once at the end.
@@ -390,38 +424,35 @@ void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
         }
         float weight_total = 0;
         if (has_parents) {
-          const SparseLevel<Value>& merged_coarse = merged.levels[level + 1];
-          const std::uint32_t n = links.count(level, c);
+          const std::uint32_t n = fl.count(c);
           for (std::uint32_t k = 0; k < n; ++k) {
-            const std::uint32_t p = links.parent(level, c, k);
-            const float w = links.weight(level, c, k);
+            const std::uint32_t p = fl.parent_of(c, k);
+            const float w = fl.weight_of(c, k);
             weight_total += w;
-            for (std::size_t j = 0; j < n_users; ++j) {
-              const SparseLevel<Value>& coarse = users[j].levels[level + 1];
-              if (coarse.has(p, epoch)) {
-                Ops::add_offset(parent_acc[j], w, coarse.val(p));
+            for (std::size_t j = 0; j <= n_users; ++j) {
+              const Slot& s = coarse[j][p];
+              if (s.stamp == epoch) {
+                Ops::add_offset(parent_acc[j], w, Ops::load(s.value));
                 parent_any[j] = true;
               }
-            }
-            if (merged_coarse.has(p, epoch)) {
-              Ops::add_offset(parent_acc[n_users], w, merged_coarse.val(p));
-              parent_any[n_users] = true;
             }
           }
         }
         // identity exactly when no parent differs from it, so untouched regions stay exact
-        auto parent_of = [&](std::size_t j) {
-          return parent_any[j] ? Ops::finish_average(parent_acc[j], weight_total) : Ops::identity();
-        };
         for (std::size_t j = 0; j < n_users; ++j) {
-          const SparseLevel<Value>& ul = users[j].levels[level];
-          const Value q = ul.has(c, epoch) ? ul.val(c) : Ops::identity();
-          residuals[j] = parent_any[j] ? Ops::residual(parent_of(j), q) : q;
+          const Slot& s = here[j][c];
+          const Reg q = s.stamp == epoch ? Ops::load(s.value) : Ops::identity();
+          residuals[j] =
+              parent_any[j] ? Ops::residual(Ops::finish_average(parent_acc[j], weight_total), q)
+                            : q;
           magnitudes[j] = Ops::magnitude(residuals[j]);
         }
-        const Value residual =
-            blend_residuals<Ops>(rule, residuals, magnitudes, n_users, user_count);
-        out.val(c) = parent_any[n_users] ? Ops::compose(parent_of(n_users), residual) : residual;
+        const Reg residual = blend_residuals<Ops>(rule, residuals, magnitudes, n_users, user_count);
+        Ops::store(out_slots[c].value,
+                   parent_any[n_users]
+                       ? Ops::compose(Ops::finish_average(parent_acc[n_users], weight_total),
+                                      residual)
+                       : residual);
       }
     });
   }
