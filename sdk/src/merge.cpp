@@ -238,24 +238,33 @@ template <class Value, class ListOf>
 void mark_sorted_union(SparseLevel<Value>& level, std::size_t lists, ListOf&& list_of,
                        std::uint32_t epoch, std::vector<SoleChange>& sole) {
   constexpr std::uint32_t kEnd = 0xffffffffu;
-  std::size_t cursor[64] = {};
+  // The lists as raw ranges, read through cursors; an exhausted list reads kEnd.
+  const std::uint32_t* at[64];
+  const std::uint32_t* end[64];
+  const std::uint32_t* begin[64];
+  std::size_t total = 0;
+  for (std::size_t j = 0; j < lists; ++j) {
+    const auto& l = list_of(j);
+    begin[j] = at[j] = l.data();
+    end[j] = l.data() + l.size();
+    total += l.size();
+  }
   sole.clear();
+  sole.reserve(total);
+  level.list.reserve(level.list.size() + total);
+  auto head = [&](std::size_t j) { return at[j] != end[j] ? *at[j] : kEnd; };
   for (;;) {
     std::uint32_t next = kEnd;
-    for (std::size_t j = 0; j < lists; ++j) {
-      const auto& l = list_of(j);
-      if (cursor[j] < l.size()) next = std::min(next, l[cursor[j]]);
-    }
+    for (std::size_t j = 0; j < lists; ++j) next = std::min(next, head(j));
     if (next == kEnd) return;
     level.mark(next, epoch);
     SoleChange who{kNoOwner, 0};
     std::uint32_t holders = 0;
     for (std::size_t j = 0; j < lists; ++j) {
-      const auto& l = list_of(j);
-      if (cursor[j] < l.size() && l[cursor[j]] == next) {
-        who = {static_cast<std::uint32_t>(j), static_cast<std::uint32_t>(cursor[j])};
+      if (head(j) == next) {
+        who = {static_cast<std::uint32_t>(j), static_cast<std::uint32_t>(at[j] - begin[j])};
         ++holders;
-        ++cursor[j];
+        ++at[j];
       }
     }
     sole.push_back(holders == 1 ? who : SoleChange{kNoOwner, 0});
@@ -541,6 +550,7 @@ struct Merger::Workspace {
   };
   std::vector<Lookup> lookups;
   std::vector<SoleChange> sole;
+  std::vector<Vec3f> moved;  ///< merged positions of the changed vertices, before listing
   detail::WorkerPool pool;
 
   std::uint32_t next_epoch() {
@@ -720,15 +730,33 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
       count_work(ws.dq_users, users, ws.dq_merged, level_count, sizeof(DualQuat));
       t0 = Clock::now();
       const auto& changed_union = ws.dq_merged.levels[0].list;  // increasing
-      for (std::size_t i = 0; i < changed_union.size(); ++i) {
+      // Moved positions in parallel (disjoint writes), then listed in order.
+      const std::size_t n_changed = changed_union.size();
+      if (ws.moved.size() < n_changed) ws.moved.resize(n_changed);
+      ws.pool.for_chunks(n_changed, 4096, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+          const std::uint32_t v = changed_union[i];
+          ws.moved[i] = from_local(
+              ws.dq_merged.levels[0].val(v).apply(local.to_local(base.positions[v])));
+        }
+      });
+      merged.positions.indices.resize(n_changed);
+      merged.positions.values.resize(3 * n_changed);
+      std::size_t kept = 0;
+      for (std::size_t i = 0; i < n_changed; ++i) {
         const std::uint32_t v = changed_union[i];
-        const Vec3f p =
-            from_local(ws.dq_merged.levels[0].val(v).apply(local.to_local(base.positions[v])));
+        const Vec3f& p = ws.moved[i];
         if (!(p == base.positions[v])) {
-          merged.positions.indices.push_back(v);
-          merged.positions.values.insert(merged.positions.values.end(), {p.x, p.y, p.z});
+          merged.positions.indices[kept] = v;
+          float* out = merged.positions.values.data() + 3 * kept;
+          out[0] = p.x;
+          out[1] = p.y;
+          out[2] = p.z;
+          ++kept;
         }
       }
+      merged.positions.indices.resize(kept);
+      merged.positions.values.resize(3 * kept);
       timings_.apply_ms += ms_since(t0);
     } else {
       with_translation_ops(t.blend, [&](auto ops) {
