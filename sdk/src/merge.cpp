@@ -15,10 +15,12 @@
 #include <numeric>
 #include <string>
 #include <thread>
+#include <type_traits>
 
 #include "csculpt/dual_quat.h"
 #include "csculpt/error.h"
 #include "dq_simd.h"
+#include "dq_soa.h"
 #include "vertex_isometry_kernel.h"
 #include "worker_pool.h"
 
@@ -379,6 +381,117 @@ typename Ops::Reg blend_residuals(NodeBlend rule, const typename Ops::Reg* r, co
   return Ops::compose_offsets(acc);
 }
 
+#if defined(__SSE2__)
+/// The intent blend of dual quaternions (DqOps, NodeBlend::intent) for the nodes
+/// list[begin, end) of one level, four nodes at a time in structure-of-arrays registers
+/// (dq_soa.h): the parent sums are gathered per node as before, the rest of the arithmetic
+/// runs one node per lane, lane by lane the scalar code's operations, so bit-identical.
+template <class Slot>
+void blend_chunk_dq_intent(const std::uint32_t* list, std::size_t begin, std::size_t end,
+                           const ParentLinks::Level& fl, bool has_parents,
+                           const Slot* const* here, const Slot* const* coarse,
+                           std::size_t n_users, std::uint32_t epoch, Slot* out_slots) {
+  using namespace detail;
+  const __m128 zero = _mm_setzero_ps();
+  DQv acc[kMaxDiffs + 1][4];
+  DQv q[kMaxDiffs][4];
+  std::uint32_t any_bits[kMaxDiffs + 1];
+  DQ4 res[kMaxDiffs];
+  __m128 mag[kMaxDiffs];
+  for (std::size_t g = begin; g < end; g += 4) {
+    const std::size_t lanes = std::min<std::size_t>(4, end - g);
+    float weight_total[4];
+    for (std::size_t j = 0; j <= n_users; ++j) any_bits[j] = 0;
+    for (std::size_t lane = 0; lane < 4; ++lane) {
+      // lanes past the end repeat the first node; their results are not stored
+      const std::uint32_t c = list[g + (lane < lanes ? lane : 0)];
+      for (std::size_t j = 0; j <= n_users; ++j) acc[j][lane] = dq_zero();
+      float wt = 0;
+      if (has_parents) {
+        const std::uint32_t n = fl.count(c);
+        for (std::uint32_t k = 0; k < n; ++k) {
+          const std::uint32_t p = fl.parent_of(c, k);
+          const float w = fl.weight_of(c, k);
+          wt += w;
+          for (std::size_t j = 0; j <= n_users; ++j) {
+            const Slot& s = coarse[j][p];
+            if (s.stamp == epoch) {
+              dq_add_scaled_offset(acc[j][lane], w, dq_load(s.value));
+              any_bits[j] |= 1u << lane;
+            }
+          }
+        }
+      }
+      weight_total[lane] = wt;
+      for (std::size_t j = 0; j < n_users; ++j) {
+        const Slot& s = here[j][c];
+        q[j][lane] = s.stamp == epoch ? dq_load(s.value) : dq_identity();
+      }
+    }
+    const __m128 wt4 = _mm_loadu_ps(weight_total);
+    auto mask_of = [](std::uint32_t bits) {
+      return _mm_castsi128_ps(_mm_set_epi32(bits & 8 ? -1 : 0, bits & 4 ? -1 : 0,
+                                            bits & 2 ? -1 : 0, bits & 1 ? -1 : 0));
+    };
+    // finish_average: real w += total weight, normalised, canonical
+    auto parent_blend = [&](std::size_t j) {
+      DQ4 a = dq4_from(acc[j][0], acc[j][1], acc[j][2], acc[j][3]);
+      a.c[0] = _mm_add_ps(a.c[0], wt4);
+      return dq4_canonical(dq4_normalized(a));
+    };
+    for (std::size_t j = 0; j < n_users; ++j) {
+      const DQ4 qj = dq4_from(q[j][0], q[j][1], q[j][2], q[j][3]);
+      if (any_bits[j] != 0) {
+        const DQ4 r = dq4_canonical(dq4_mul(dq4_inverse(parent_blend(j)), qj));
+        res[j] = dq4_select(mask_of(any_bits[j]), r, qj);
+      } else {
+        res[j] = qj;
+      }
+      mag[j] = dq4_magnitude(res[j]);
+    }
+    // intent: acc = sum_j c_j (r_j - 1), c_j = m_j / sum_k s_jk m_k over active j, k
+    DQ4 sum;
+    for (__m128& x : sum.c) x = zero;
+    __m128 magnitude_sum = zero;
+    for (std::size_t j = 0; j < n_users; ++j) {
+      const __m128 active_j = _mm_cmpgt_ps(mag[j], zero);
+      if (_mm_movemask_ps(active_j) == 0) continue;
+      __m128 same = zero;
+      for (std::size_t k = 0; k < n_users; ++k) {
+        const __m128 active_k = _mm_cmpgt_ps(mag[k], zero);
+        __m128 term;
+        if (k == j) {
+          term = mag[k];  // closeness 1: s m_k = m_k exactly
+        } else {
+          const __m128 larger = _mm_max_ps(mag[k], mag[j]);  // std::max(m_j, m_k)
+          const __m128 closeness = _mm_max_ps(  // std::max(0.f, x)
+              _mm_sub_ps(_mm_set1_ps(1.f), _mm_div_ps(dq4_distance(res[j], res[k]), larger)),
+              zero);
+          term = _mm_mul_ps(_mm_mul_ps(closeness, closeness), mag[k]);
+        }
+        same = _mm_add_ps(same, _mm_and_ps(active_k, term));  // + 0 where inactive: exact
+      }
+      const __m128 w = _mm_div_ps(mag[j], same);
+      sum.c[0] = _mm_add_ps(
+          sum.c[0],
+          _mm_and_ps(active_j, _mm_mul_ps(w, _mm_sub_ps(res[j].c[0], _mm_set1_ps(1.f)))));
+      for (int i = 1; i < 8; ++i)
+        sum.c[i] = _mm_add_ps(sum.c[i], _mm_and_ps(active_j, _mm_mul_ps(w, res[j].c[i])));
+      magnitude_sum = _mm_add_ps(magnitude_sum, _mm_and_ps(active_j, mag[j]));
+    }
+    sum.c[0] = _mm_add_ps(sum.c[0], _mm_set1_ps(1.f));
+    DQ4 blended = dq4_select(_mm_cmpgt_ps(magnitude_sum, zero),
+                             dq4_canonical(dq4_normalized(sum)), dq4_identity());
+    if (any_bits[n_users] != 0)
+      blended = dq4_select(mask_of(any_bits[n_users]),
+                           dq4_canonical(dq4_mul(parent_blend(n_users), blended)), blended);
+    DQv out[4];
+    dq4_to(blended, out);
+    for (std::size_t lane = 0; lane < lanes; ++lane) dq_store(out_slots[list[g + lane]].value, out[lane]);
+  }
+}
+#endif
+
 /// Residuals of every diff at each needed node, blended per node, recomposed from the
 /// coarsest level down (paper §3.1 "Final Merged Mesh"). Fills merged.levels[0] for the
 /// nodes listed there.
@@ -417,6 +530,17 @@ void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
     Slot* out_slots = out.slots.data();
     const std::uint32_t* out_list = out.list.data();
     // Each node reads only coarser, finished levels and writes only itself.
+#if defined(__SSE2__)
+    if constexpr (std::is_same_v<Ops, DqOps>) {
+      if (rule == NodeBlend::intent) {
+        pool.for_chunks(out.list.size(), 2048, [&](std::size_t begin, std::size_t end) {
+          blend_chunk_dq_intent(out_list, begin, end, fl, has_parents, here, coarse, n_users,
+                                epoch, out_slots);
+        });
+        continue;
+      }
+    }
+#endif
     pool.for_chunks(out.list.size(), 2048, [&](std::size_t begin, std::size_t end) {
       Reg residuals[kMaxDiffs];
       float magnitudes[kMaxDiffs];
