@@ -49,7 +49,11 @@ inline DQ4 dq4_identity() {
   for (int i = 1; i < 8; ++i) q.c[i] = _mm_setzero_ps();
   return q;
 }
+/// mask ? a : b per lane; `bits` = the mask's movemask (0xf: all a, 0: all b).
 inline DQ4 dq4_select(__m128 mask, const DQ4& a, const DQ4& b) {
+  const int bits = _mm_movemask_ps(mask);
+  if (bits == 0xf) return a;
+  if (bits == 0) return b;
   DQ4 q;
   for (int i = 0; i < 8; ++i) q.c[i] = sel(mask, a.c[i], b.c[i]);
   return q;
@@ -91,7 +95,9 @@ inline DQ4 dq4_inverse(const DQ4& a) {
 }
 /// canonical(): lanes with a negative real w negated (-1.f * x is a sign flip).
 inline DQ4 dq4_canonical(const DQ4& q) {
-  const __m128 flip = _mm_and_ps(_mm_cmplt_ps(q.c[0], _mm_setzero_ps()), _mm_set1_ps(-0.f));
+  const __m128 negative = _mm_cmplt_ps(q.c[0], _mm_setzero_ps());
+  if (_mm_movemask_ps(negative) == 0) return q;  // the common case: nothing to flip
+  const __m128 flip = _mm_and_ps(negative, _mm_set1_ps(-0.f));
   DQ4 o;
   for (int i = 0; i < 8; ++i) o.c[i] = _mm_xor_ps(q.c[i], flip);
   return o;
@@ -111,11 +117,12 @@ inline DQ4 dq4_normalized(const DQ4& v) {
                  _mm_mul_ps(o.c[2], o.c[6])),
       _mm_mul_ps(o.c[3], o.c[7]));
   for (int i = 0; i < 4; ++i) o.c[4 + i] = _mm_sub_ps(o.c[4 + i], _mm_mul_ps(rd, o.c[i]));
+  if (_mm_movemask_ps(ok) == 0xf) return o;
   return dq4_select(ok, o, dq4_identity());
 }
-/// magnitude(): |canonical(q) - 1| over the 8 components, summed in order.
-inline __m128 dq4_magnitude(const DQ4& q) {
-  const DQ4 c = dq4_canonical(q);
+/// magnitude() of values already canonical (canonical() is then the identity):
+/// |q - 1| over the 8 components, summed in order.
+inline __m128 dq4_magnitude_of_canonical(const DQ4& c) {
   const __m128 dw = _mm_sub_ps(c.c[0], _mm_set1_ps(1.f));
   __m128 s = _mm_mul_ps(dw, dw);
   for (int i = 1; i < 8; ++i) s = _mm_add_ps(s, _mm_mul_ps(c.c[i], c.c[i]));

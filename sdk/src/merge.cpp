@@ -447,7 +447,8 @@ void blend_chunk_dq_intent(const std::uint32_t* list, std::size_t begin, std::si
       } else {
         res[j] = qj;
       }
-      mag[j] = dq4_magnitude(res[j]);
+      // residuals and stored values are canonical already
+      mag[j] = dq4_magnitude_of_canonical(res[j]);
     }
     // intent: acc = sum_j c_j (r_j - 1), c_j = m_j / sum_k s_jk m_k over active j, k
     DQ4 sum;
@@ -533,7 +534,7 @@ void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
 #if defined(__SSE2__)
     if constexpr (std::is_same_v<Ops, DqOps>) {
       if (rule == NodeBlend::intent) {
-        pool.for_chunks(out.list.size(), 2048, [&](std::size_t begin, std::size_t end) {
+        pool.for_chunks(out.list.size(), 512, [&](std::size_t begin, std::size_t end) {
           blend_chunk_dq_intent(out_list, begin, end, fl, has_parents, here, coarse, n_users,
                                 epoch, out_slots);
         });
