@@ -169,6 +169,7 @@ struct VertexIsometryScratch {
   std::vector<Quat> rotation_sum;    ///< sum of (q_face - 1) over changed faces
   std::vector<std::uint32_t> faces;  ///< faces around changed vertices, first-touch order
   std::vector<Quat> face_offset;     ///< per listed face: q_face - 1 (zero if degenerate)
+  std::vector<Vec3f> edited;         ///< per touched vertex: its edited position
   std::uint32_t epoch = 0;
 
   void resize(std::size_t vertex_count, std::size_t face_count) {
@@ -176,6 +177,7 @@ struct VertexIsometryScratch {
     if (vertex_stamp.size() < vertex_count) {
       vertex_stamp.resize(vertex_count, 0);
       rotation_sum.resize(vertex_count);
+      edited.resize(vertex_count);
     }
   }
   std::uint32_t next_epoch() {
@@ -207,6 +209,7 @@ void compute_vertex_isometries(const Topology& topology, std::span<const Vec3f> 
     if (scratch.vertex_stamp[v] != epoch) {  // also a changed vertex on no face
       scratch.vertex_stamp[v] = epoch;
       scratch.rotation_sum[v] = {0, 0, 0, 0};
+      scratch.edited[v] = edited(v);
       touched.push_back(v);
     }
     for (std::uint32_t i = vf.offsets[v]; i < vf.offsets[v + 1]; ++i) {
@@ -218,6 +221,7 @@ void compute_vertex_isometries(const Topology& topology, std::span<const Vec3f> 
         if (scratch.vertex_stamp[u] != epoch) {
           scratch.vertex_stamp[u] = epoch;
           scratch.rotation_sum[u] = {0, 0, 0, 0};
+          scratch.edited[u] = edited(u);
           touched.push_back(u);
         }
       }
@@ -233,7 +237,7 @@ void compute_vertex_isometries(const Topology& topology, std::span<const Vec3f> 
       const Triangle& t = topology.triangles[scratch.faces[first_scalar + f]];
       for (int i = 0; i < 3; ++i) {
         p[f][i] = base[t[i]];
-        p[f][3 + i] = edited(t[i]);
+        p[f][3 + i] = scratch.edited[t[i]];
       }
     }
     Quat q[2];
@@ -247,8 +251,9 @@ void compute_vertex_isometries(const Topology& topology, std::span<const Vec3f> 
   for (std::size_t k = first_scalar; k < scratch.faces.size(); ++k) {
     const Triangle& t = topology.triangles[scratch.faces[k]];
     Quat q;
-    scratch.face_offset[k] = face_rotation_kernel(base[t[0]], base[t[1]], base[t[2]], edited(t[0]),
-                                                  edited(t[1]), edited(t[2]), q)
+    scratch.face_offset[k] = face_rotation_kernel(base[t[0]], base[t[1]], base[t[2]],
+                                                  scratch.edited[t[0]], scratch.edited[t[1]],
+                                                  scratch.edited[t[2]], q)
                                  ? Quat{q.w - 1.f, q.x, q.y, q.z}
                                  : Quat{0, 0, 0, 0};
   }
@@ -267,7 +272,7 @@ void compute_vertex_isometries(const Topology& topology, std::span<const Vec3f> 
     const float n2 = hsum_ordered(_mm_mul_ps(r, r));
     r = n2 > 1e-30f ? _mm_mul_ps(_mm_set1_ps(1.f / std::sqrt(n2)), r) : _mm_set_ss(1.f);
     // from_rotation_and_points: (r, pb r - r pa) with p = quat(0, 0.5 point)
-    const Vec3f from = frame.to_local(base[u]), to = frame.to_local(edited(u));
+    const Vec3f from = frame.to_local(base[u]), to = frame.to_local(scratch.edited[u]);
     const __m128 half = _mm_set1_ps(0.5f);
     const __m128 pa = _mm_mul_ps(half, _mm_set_ps(from.z, from.y, from.x, 0.f));
     const __m128 pb = _mm_mul_ps(half, _mm_set_ps(to.z, to.y, to.x, 0.f));
@@ -284,7 +289,7 @@ void compute_vertex_isometries(const Topology& topology, std::span<const Vec3f> 
     const float n2 = dot(r, r);
     r = n2 > 1e-30f ? (1.f / std::sqrt(n2)) * r : Quat{};
     store(u, canonical(DualQuat::from_rotation_and_points(r, frame.to_local(base[u]),
-                                                          frame.to_local(edited(u)))));
+                                                          frame.to_local(scratch.edited[u]))));
   }
 #endif
 }
