@@ -493,18 +493,11 @@ void blend_chunk_dq_intent(const std::uint32_t* list, std::size_t begin, std::si
 }
 #endif
 
-/// Residuals of every diff at each needed node, blended per node, recomposed from the
-/// coarsest level down (paper §3.1 "Final Merged Mesh"). Fills merged.levels[0] for the
-/// nodes listed there.
-template <class Ops>
-void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
-                           std::span<SparsePyramid<typename Ops::Value>> users,
-                           SparsePyramid<typename Ops::Value>& merged, std::uint32_t epoch,
-                           NodeBlend rule, detail::WorkerPool& pool) {
-  using Value = typename Ops::Value;
-  using Reg = typename Ops::Reg;
-  using Slot = typename SparseLevel<Value>::Slot;
-  // The nodes the result needs: ancestors of the vertices some diff changed.
+/// Marks the nodes the result needs above level 0: the ancestors of the vertices listed
+/// on merged.levels[0].
+template <class Value>
+void mark_ancestors(const ParentLinks& links, std::size_t level_count,
+                    SparsePyramid<Value>& merged, std::uint32_t epoch) {
   for (std::size_t i = 0; i + 1 < level_count; ++i) {
     SparseLevel<Value>& coarse = merged.levels[i + 1];
     const ParentLinks::Level fl = links.level(i);
@@ -513,6 +506,19 @@ void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
       for (std::uint32_t k = 0; k < n; ++k) coarse.mark(fl.parent_of(c, k), epoch);
     }
   }
+}
+
+/// Residuals of every diff at each needed node, blended per node, recomposed from the
+/// coarsest level down (paper §3.1 "Final Merged Mesh"). Fills merged.levels[0] for the
+/// nodes listed there, and the coarser levels for the nodes mark_ancestors() listed.
+template <class Ops>
+void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
+                           std::span<SparsePyramid<typename Ops::Value>> users,
+                           SparsePyramid<typename Ops::Value>& merged, std::uint32_t epoch,
+                           NodeBlend rule, detail::WorkerPool& pool) {
+  using Value = typename Ops::Value;
+  using Reg = typename Ops::Reg;
+  using Slot = typename SparseLevel<Value>::Slot;
   const auto user_count = static_cast<std::uint32_t>(users.size());
   const std::size_t n_users = users.size();
   for (std::size_t level = level_count; level-- > 0;) {
@@ -798,17 +804,12 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
   {
     auto t0 = Clock::now();
     const std::uint32_t epoch = ws.next_epoch();
-    // edited-position lookups per diff
+    // edited-position lookups per diff (filled in the diff's own task below)
     for (std::uint32_t u = 0; u < users; ++u) {
       auto& lk = ws.lookups[u];
       if (lk.slot.size() < vertex_count) {
         lk.slot.resize(vertex_count);
         lk.stamp.resize(vertex_count, 0);
-      }
-      const AttributeDiff& pd = diffs[order[u]]->positions;
-      for (std::uint32_t i = 0; i < pd.indices.size(); ++i) {
-        lk.slot[pd.indices[i]] = i;
-        lk.stamp[pd.indices[i]] = epoch;
       }
     }
     auto edited_of = [&](std::uint32_t u) {
@@ -824,31 +825,47 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
       if (ws.dq_users.size() < users) ws.dq_users.resize(users);
       for (std::uint32_t u = 0; u < users; ++u) ws.dq_users[u].reserve(hierarchy_, level_count);
       ws.dq_merged.reserve(hierarchy_, level_count);
-      // Each diff's isometries and averages are independent: one task per diff.
-      ws.pool.run(users, [&](std::size_t u) {
+      // One region, one task per diff (its lookup, isometries and averages: independent of
+      // the other diffs), plus one task, listed last so that the thread that finishes first
+      // takes it, for the nodes the result needs (the union of the changed vertices and
+      // their ancestors): it writes only the merged pyramid's marks, so no barrier between.
+      double iso_task_ms[kMaxDiffs] = {};
+      ws.pool.run(users + 1, [&](std::size_t u) {
+        if (u == users) {
+          mark_sorted_union(
+              ws.dq_merged.levels[0], users,
+              [&](std::size_t j) -> const auto& { return diffs[order[j]]->positions.indices; },
+              epoch, ws.sole);
+          mark_ancestors(links, level_count, ws.dq_merged, epoch);
+          return;
+        }
+        const auto task_t0 = Clock::now();
         auto& lk = ws.lookups[u];
+        const AttributeDiff& pd = diffs[order[u]]->positions;
+        for (std::uint32_t i = 0; i < pd.indices.size(); ++i) {
+          lk.slot[pd.indices[i]] = i;
+          lk.stamp[pd.indices[i]] = epoch;
+        }
         lk.isometry.resize(vertex_count, base.face_count());
         auto& level0 = ws.dq_users[u].levels[0];
         detail::compute_vertex_isometries(
-            hierarchy_.topology(), base.positions, diffs[order[u]]->positions.indices,
+            hierarchy_.topology(), base.positions, pd.indices,
             edited_of(static_cast<std::uint32_t>(u)), lk.isometry,
             [&level0, epoch](std::uint32_t v, const DualQuat& q) {
               level0.slots[v] = {q, epoch};
             },
             lk.touched, local);
         level0.list.assign(lk.touched.begin(), lk.touched.end());
-      });
-      timings_.isometry_ms += ms_since(t0);
-      t0 = Clock::now();
-      ws.pool.run(users, [&](std::size_t u) {
+        iso_task_ms[u] = ms_since(task_t0);
         decompose<DqOps>(links, level_count, ws.dq_users[u], epoch);
       });
-      timings_.decompose_ms += ms_since(t0);
+      // The region's time split: isometries = the longest diff's isometry part, the rest
+      // (decomposition and its imbalance) to decompose.
+      const double region_ms = ms_since(t0);
+      const double iso_ms = *std::max_element(iso_task_ms, iso_task_ms + users);
+      timings_.isometry_ms += std::min(iso_ms, region_ms);
+      timings_.decompose_ms += std::max(0.0, region_ms - iso_ms);
       t0 = Clock::now();
-      mark_sorted_union(
-          ws.dq_merged.levels[0],
-          users, [&](std::size_t u) -> const auto& { return diffs[order[u]]->positions.indices; },
-          epoch, ws.sole);
       blend_and_reconstruct<DqOps>(links, level_count, std::span(ws.dq_users.data(), users),
                                    ws.dq_merged, epoch, t.node_blend, ws.pool);
       timings_.blend_ms += ms_since(t0);
@@ -914,6 +931,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
             out.levels[0],
             users, [&](std::size_t u) -> const auto& { return diffs[order[u]]->positions.indices; },
             epoch, ws.sole);
+        mark_ancestors(links, level_count, out, epoch);
         blend_and_reconstruct<Ops>(links, level_count, std::span(ws.vec_users.data(), users), out,
                                    epoch, t.node_blend, ws.pool);
         timings_.blend_ms += ms_since(t0);
@@ -984,6 +1002,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
       ws.pool.run(users, [&](std::size_t u) {
         decompose<Ops>(links, channel_levels, ws.vec_users[u], epoch);
       });
+      mark_ancestors(links, channel_levels, out, epoch);
       blend_and_reconstruct<Ops>(links, channel_levels, std::span(ws.vec_users.data(), users), out,
                                  epoch, channel_blend, ws.pool);
       const auto& list = out.levels[0].list;  // increasing
