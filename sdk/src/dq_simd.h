@@ -91,8 +91,8 @@ inline DQv dq_inverse_mul(const DQv& a, const DQv& b) {
 }
 /// canonical(): negate both parts when the real w is negative.
 inline DQv dq_canonical(const DQv& q) {
-  const __m128 neg = _mm_cmplt_ps(_mm_shuffle_ps(q.r, q.r, _MM_SHUFFLE(0, 0, 0, 0)),
-                                  _mm_setzero_ps());
+  const __m128 neg =
+      _mm_cmplt_ps(_mm_shuffle_ps(q.r, q.r, _MM_SHUFFLE(0, 0, 0, 0)), _mm_setzero_ps());
   const __m128 flip = _mm_and_ps(neg, sign_mask(true, true, true, true));
   return {_mm_xor_ps(q.r, flip), _mm_xor_ps(q.d, flip)};
 }

@@ -46,6 +46,7 @@ inline void dq4_to(const DQ4& q, DQv (&out)[4]) {
 inline DQ4 dq4_identity() {
   DQ4 q;
   q.c[0] = _mm_set1_ps(1.f);
+#pragma GCC unroll 8
   for (int i = 1; i < 8; ++i) q.c[i] = _mm_setzero_ps();
   return q;
 }
@@ -55,6 +56,7 @@ inline DQ4 dq4_select(__m128 mask, const DQ4& a, const DQ4& b) {
   if (bits == 0xf) return a;
   if (bits == 0) return b;
   DQ4 q;
+#pragma GCC unroll 8
   for (int i = 0; i < 8; ++i) q.c[i] = sel(mask, a.c[i], b.c[i]);
   return q;
 }
@@ -63,18 +65,18 @@ inline DQ4 dq4_select(__m128 mask, const DQ4& a, const DQ4& b) {
 inline void q4_mul(const __m128* a, const __m128* b, __m128* out) {
   const __m128 aw = a[0], ax = a[1], ay = a[2], az = a[3];
   const __m128 bw = b[0], bx = b[1], by = b[2], bz = b[3];
-  out[0] = _mm_sub_ps(
-      _mm_sub_ps(_mm_sub_ps(_mm_mul_ps(aw, bw), _mm_mul_ps(ax, bx)), _mm_mul_ps(ay, by)),
-      _mm_mul_ps(az, bz));
-  out[1] = _mm_sub_ps(
-      _mm_add_ps(_mm_add_ps(_mm_mul_ps(aw, bx), _mm_mul_ps(ax, bw)), _mm_mul_ps(ay, bz)),
-      _mm_mul_ps(az, by));
-  out[2] = _mm_add_ps(
-      _mm_add_ps(_mm_sub_ps(_mm_mul_ps(aw, by), _mm_mul_ps(ax, bz)), _mm_mul_ps(ay, bw)),
-      _mm_mul_ps(az, bx));
-  out[3] = _mm_add_ps(
-      _mm_sub_ps(_mm_add_ps(_mm_mul_ps(aw, bz), _mm_mul_ps(ax, by)), _mm_mul_ps(ay, bx)),
-      _mm_mul_ps(az, bw));
+  out[0] =
+      _mm_sub_ps(_mm_sub_ps(_mm_sub_ps(_mm_mul_ps(aw, bw), _mm_mul_ps(ax, bx)), _mm_mul_ps(ay, by)),
+                 _mm_mul_ps(az, bz));
+  out[1] =
+      _mm_sub_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(aw, bx), _mm_mul_ps(ax, bw)), _mm_mul_ps(ay, bz)),
+                 _mm_mul_ps(az, by));
+  out[2] =
+      _mm_add_ps(_mm_add_ps(_mm_sub_ps(_mm_mul_ps(aw, by), _mm_mul_ps(ax, bz)), _mm_mul_ps(ay, bw)),
+                 _mm_mul_ps(az, bx));
+  out[3] =
+      _mm_add_ps(_mm_sub_ps(_mm_add_ps(_mm_mul_ps(aw, bz), _mm_mul_ps(ax, by)), _mm_mul_ps(ay, bx)),
+                 _mm_mul_ps(az, bw));
 }
 /// operator*(DualQuat, DualQuat): (ar br, ar bd + ad br)
 inline DQ4 dq4_mul(const DQ4& a, const DQ4& b) {
@@ -83,6 +85,7 @@ inline DQ4 dq4_mul(const DQ4& a, const DQ4& b) {
   __m128 t1[4], t2[4];
   q4_mul(a.c, b.c + 4, t1);
   q4_mul(a.c + 4, b.c, t2);
+#pragma GCC unroll 8
   for (int i = 0; i < 4; ++i) o.c[4 + i] = _mm_add_ps(t1[i], t2[i]);
   return o;
 }
@@ -99,23 +102,26 @@ inline DQ4 dq4_canonical(const DQ4& q) {
   if (_mm_movemask_ps(negative) == 0) return q;  // the common case: nothing to flip
   const __m128 flip = _mm_and_ps(negative, _mm_set1_ps(-0.f));
   DQ4 o;
+#pragma GCC unroll 8
   for (int i = 0; i < 8; ++i) o.c[i] = _mm_xor_ps(q.c[i], flip);
   return o;
 }
 /// normalized(): identity where the real part's squared norm is not > 1e-30.
 inline DQ4 dq4_normalized(const DQ4& v) {
-  const __m128 n2 = _mm_add_ps(
-      _mm_add_ps(_mm_add_ps(_mm_mul_ps(v.c[0], v.c[0]), _mm_mul_ps(v.c[1], v.c[1])),
-                 _mm_mul_ps(v.c[2], v.c[2])),
-      _mm_mul_ps(v.c[3], v.c[3]));
+  const __m128 n2 =
+      _mm_add_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(v.c[0], v.c[0]), _mm_mul_ps(v.c[1], v.c[1])),
+                            _mm_mul_ps(v.c[2], v.c[2])),
+                 _mm_mul_ps(v.c[3], v.c[3]));
   const __m128 ok = _mm_cmpgt_ps(n2, _mm_set1_ps(1e-30f));
   const __m128 inv = _mm_div_ps(_mm_set1_ps(1.f), _mm_sqrt_ps(n2));
   DQ4 o;
+#pragma GCC unroll 8
   for (int i = 0; i < 8; ++i) o.c[i] = _mm_mul_ps(v.c[i], inv);
-  const __m128 rd = _mm_add_ps(
-      _mm_add_ps(_mm_add_ps(_mm_mul_ps(o.c[0], o.c[4]), _mm_mul_ps(o.c[1], o.c[5])),
-                 _mm_mul_ps(o.c[2], o.c[6])),
-      _mm_mul_ps(o.c[3], o.c[7]));
+  const __m128 rd =
+      _mm_add_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(o.c[0], o.c[4]), _mm_mul_ps(o.c[1], o.c[5])),
+                            _mm_mul_ps(o.c[2], o.c[6])),
+                 _mm_mul_ps(o.c[3], o.c[7]));
+#pragma GCC unroll 8
   for (int i = 0; i < 4; ++i) o.c[4 + i] = _mm_sub_ps(o.c[4 + i], _mm_mul_ps(rd, o.c[i]));
   if (_mm_movemask_ps(ok) == 0xf) return o;
   return dq4_select(ok, o, dq4_identity());
@@ -125,21 +131,21 @@ inline DQ4 dq4_normalized(const DQ4& v) {
 inline __m128 dq4_magnitude_of_canonical(const DQ4& c) {
   const __m128 dw = _mm_sub_ps(c.c[0], _mm_set1_ps(1.f));
   __m128 s = _mm_mul_ps(dw, dw);
+#pragma GCC unroll 8
   for (int i = 1; i < 8; ++i) s = _mm_add_ps(s, _mm_mul_ps(c.c[i], c.c[i]));
   return _mm_sqrt_ps(s);
 }
 /// sqrt(dot(dr, dr) + dot(dd, dd)) with dr, dd the differences of the parts.
 inline __m128 dq4_distance(const DQ4& a, const DQ4& b) {
   __m128 d[8];
+#pragma GCC unroll 8
   for (int i = 0; i < 8; ++i) d[i] = _mm_sub_ps(a.c[i], b.c[i]);
-  const __m128 r = _mm_add_ps(
-      _mm_add_ps(_mm_add_ps(_mm_mul_ps(d[0], d[0]), _mm_mul_ps(d[1], d[1])),
-                 _mm_mul_ps(d[2], d[2])),
-      _mm_mul_ps(d[3], d[3]));
-  const __m128 u = _mm_add_ps(
-      _mm_add_ps(_mm_add_ps(_mm_mul_ps(d[4], d[4]), _mm_mul_ps(d[5], d[5])),
-                 _mm_mul_ps(d[6], d[6])),
-      _mm_mul_ps(d[7], d[7]));
+  const __m128 r = _mm_add_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(d[0], d[0]), _mm_mul_ps(d[1], d[1])),
+                                         _mm_mul_ps(d[2], d[2])),
+                              _mm_mul_ps(d[3], d[3]));
+  const __m128 u = _mm_add_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(d[4], d[4]), _mm_mul_ps(d[5], d[5])),
+                                         _mm_mul_ps(d[6], d[6])),
+                              _mm_mul_ps(d[7], d[7]));
   return _mm_sqrt_ps(_mm_add_ps(r, u));
 }
 

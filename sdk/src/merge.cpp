@@ -51,11 +51,21 @@ struct DqOps {
   using Value = DualQuat;
 #if defined(__SSE2__)
   using Reg = detail::DQv;
-  static Reg load(const Value& q) { return detail::dq_load(q); }
-  static void store(Value& out, const Reg& q) { detail::dq_store(out, q); }
-  static Reg identity() { return detail::dq_identity(); }
-  static Reg zero() { return detail::dq_zero(); }
-  static void add(Reg& acc, float w, const Reg& q) { detail::dq_add_scaled(acc, w, q); }
+  static Reg load(const Value& q) {
+    return detail::dq_load(q);
+  }
+  static void store(Value& out, const Reg& q) {
+    detail::dq_store(out, q);
+  }
+  static Reg identity() {
+    return detail::dq_identity();
+  }
+  static Reg zero() {
+    return detail::dq_zero();
+  }
+  static void add(Reg& acc, float w, const Reg& q) {
+    detail::dq_add_scaled(acc, w, q);
+  }
   static void add_offset(Reg& acc, float w, const Reg& q) {
     detail::dq_add_scaled_offset(acc, w, q);
   }
@@ -70,7 +80,9 @@ struct DqOps {
   static Reg compose(const Reg& parent, const Reg& residual) {
     return detail::dq_canonical(detail::dq_mul(parent, residual));
   }
-  static float magnitude(const Reg& q) { return detail::dq_magnitude(q); }
+  static float magnitude(const Reg& q) {
+    return detail::dq_magnitude(q);
+  }
   static Reg finish_blend(const Reg& acc, float magnitude_sum, std::uint32_t /*users*/) {
     if (!(magnitude_sum > 0)) return identity();
     return detail::dq_canonical(detail::dq_normalized(acc));
@@ -80,15 +92,29 @@ struct DqOps {
     using namespace detail;
     return dq_canonical(dq_normalized(dq_add_real_w(acc, 1.f)));
   }
-  static float distance(const Reg& a, const Reg& b) { return detail::dq_distance(a, b); }
+  static float distance(const Reg& a, const Reg& b) {
+    return detail::dq_distance(a, b);
+  }
 #else
   using Reg = DualQuat;
-  static Reg load(const Value& q) { return q; }
-  static void store(Value& out, const Reg& q) { out = q; }
-  static Reg identity() { return DualQuat::identity(); }
-  static Reg zero() { return {{0, 0, 0, 0}, {0, 0, 0, 0}}; }
-  static void add(Reg& acc, float w, const Reg& q) { add_scaled(acc, w, q); }
-  static void add_offset(Reg& acc, float w, const Reg& q) { add_scaled_offset(acc, w, q); }
+  static Reg load(const Value& q) {
+    return q;
+  }
+  static void store(Value& out, const Reg& q) {
+    out = q;
+  }
+  static Reg identity() {
+    return DualQuat::identity();
+  }
+  static Reg zero() {
+    return {{0, 0, 0, 0}, {0, 0, 0, 0}};
+  }
+  static void add(Reg& acc, float w, const Reg& q) {
+    add_scaled(acc, w, q);
+  }
+  static void add_offset(Reg& acc, float w, const Reg& q) {
+    add_scaled_offset(acc, w, q);
+  }
   /// Average of all children: the absent ones (identity) weigh total - listed.
   static Reg finish_average(Reg acc, float total_weight) {
     acc.real.w += total_weight;
@@ -100,7 +126,9 @@ struct DqOps {
   static Reg compose(const Reg& parent, const Reg& residual) {
     return canonical(parent * residual);
   }
-  static float magnitude(const Reg& q) { return csculpt::magnitude(q); }
+  static float magnitude(const Reg& q) {
+    return csculpt::magnitude(q);
+  }
   static Reg finish_blend(const Reg& acc, float magnitude_sum, std::uint32_t /*users*/) {
     if (!(magnitude_sum > 0)) return identity();
     return canonical(normalized(acc));
@@ -331,8 +359,7 @@ void decompose(const ParentLinks& links, std::size_t level_count,
     }
     const float* child_weight_sum = links.level(i + 1).child_weight_sum;
     for (std::uint32_t p : coarse.list)
-      Ops::store(coarse.val(p),
-                 Ops::finish_average(Ops::load(coarse.val(p)), child_weight_sum[p]));
+      Ops::store(coarse.val(p), Ops::finish_average(Ops::load(coarse.val(p)), child_weight_sum[p]));
   }
 }
 
@@ -388,9 +415,9 @@ typename Ops::Reg blend_residuals(NodeBlend rule, const typename Ops::Reg* r, co
 /// runs one node per lane, lane by lane the scalar code's operations, so bit-identical.
 template <class Slot>
 void blend_chunk_dq_intent(const std::uint32_t* list, std::size_t begin, std::size_t end,
-                           const ParentLinks::Level& fl, bool has_parents,
-                           const Slot* const* here, const Slot* const* coarse,
-                           std::size_t n_users, std::uint32_t epoch, Slot* out_slots) {
+                           const ParentLinks::Level& fl, bool has_parents, const Slot* const* here,
+                           const Slot* const* coarse, std::size_t n_users, std::uint32_t epoch,
+                           Slot* out_slots) {
   using namespace detail;
   const __m128 zero = _mm_setzero_ps();
   DQv acc[kMaxDiffs + 1][4];
@@ -430,8 +457,8 @@ void blend_chunk_dq_intent(const std::uint32_t* list, std::size_t begin, std::si
     }
     const __m128 wt4 = _mm_loadu_ps(weight_total);
     auto mask_of = [](std::uint32_t bits) {
-      return _mm_castsi128_ps(_mm_set_epi32(bits & 8 ? -1 : 0, bits & 4 ? -1 : 0,
-                                            bits & 2 ? -1 : 0, bits & 1 ? -1 : 0));
+      return _mm_castsi128_ps(_mm_set_epi32(bits & 8 ? -1 : 0, bits & 4 ? -1 : 0, bits & 2 ? -1 : 0,
+                                            bits & 1 ? -1 : 0));
     };
     // finish_average: real w += total weight, normalised, canonical
     auto parent_blend = [&](std::size_t j) {
@@ -465,30 +492,30 @@ void blend_chunk_dq_intent(const std::uint32_t* list, std::size_t begin, std::si
           term = mag[k];  // closeness 1: s m_k = m_k exactly
         } else {
           const __m128 larger = _mm_max_ps(mag[k], mag[j]);  // std::max(m_j, m_k)
-          const __m128 closeness = _mm_max_ps(  // std::max(0.f, x)
-              _mm_sub_ps(_mm_set1_ps(1.f), _mm_div_ps(dq4_distance(res[j], res[k]), larger)),
-              zero);
+          const __m128 closeness = _mm_max_ps(               // std::max(0.f, x)
+              _mm_sub_ps(_mm_set1_ps(1.f), _mm_div_ps(dq4_distance(res[j], res[k]), larger)), zero);
           term = _mm_mul_ps(_mm_mul_ps(closeness, closeness), mag[k]);
         }
         same = _mm_add_ps(same, _mm_and_ps(active_k, term));  // + 0 where inactive: exact
       }
       const __m128 w = _mm_div_ps(mag[j], same);
       sum.c[0] = _mm_add_ps(
-          sum.c[0],
-          _mm_and_ps(active_j, _mm_mul_ps(w, _mm_sub_ps(res[j].c[0], _mm_set1_ps(1.f)))));
+          sum.c[0], _mm_and_ps(active_j, _mm_mul_ps(w, _mm_sub_ps(res[j].c[0], _mm_set1_ps(1.f)))));
+#pragma GCC unroll 8
       for (int i = 1; i < 8; ++i)
         sum.c[i] = _mm_add_ps(sum.c[i], _mm_and_ps(active_j, _mm_mul_ps(w, res[j].c[i])));
       magnitude_sum = _mm_add_ps(magnitude_sum, _mm_and_ps(active_j, mag[j]));
     }
     sum.c[0] = _mm_add_ps(sum.c[0], _mm_set1_ps(1.f));
-    DQ4 blended = dq4_select(_mm_cmpgt_ps(magnitude_sum, zero),
-                             dq4_canonical(dq4_normalized(sum)), dq4_identity());
+    DQ4 blended = dq4_select(_mm_cmpgt_ps(magnitude_sum, zero), dq4_canonical(dq4_normalized(sum)),
+                             dq4_identity());
     if (any_bits[n_users] != 0)
       blended = dq4_select(mask_of(any_bits[n_users]),
                            dq4_canonical(dq4_mul(parent_blend(n_users), blended)), blended);
     DQv out[4];
     dq4_to(blended, out);
-    for (std::size_t lane = 0; lane < lanes; ++lane) dq_store(out_slots[list[g + lane]].value, out[lane]);
+    for (std::size_t lane = 0; lane < lanes; ++lane)
+      dq_store(out_slots[list[g + lane]].value, out[lane]);
   }
 }
 #endif
@@ -496,8 +523,8 @@ void blend_chunk_dq_intent(const std::uint32_t* list, std::size_t begin, std::si
 /// Marks the nodes the result needs above level 0: the ancestors of the vertices listed
 /// on merged.levels[0].
 template <class Value>
-void mark_ancestors(const ParentLinks& links, std::size_t level_count,
-                    SparsePyramid<Value>& merged, std::uint32_t epoch) {
+void mark_ancestors(const ParentLinks& links, std::size_t level_count, SparsePyramid<Value>& merged,
+                    std::uint32_t epoch) {
   for (std::size_t i = 0; i + 1 < level_count; ++i) {
     SparseLevel<Value>& coarse = merged.levels[i + 1];
     const ParentLinks::Level fl = links.level(i);
@@ -541,8 +568,8 @@ void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
     if constexpr (std::is_same_v<Ops, DqOps>) {
       if (rule == NodeBlend::intent) {
         pool.for_chunks(out.list.size(), 512, [&](std::size_t begin, std::size_t end) {
-          blend_chunk_dq_intent(out_list, begin, end, fl, has_parents, here, coarse, n_users,
-                                epoch, out_slots);
+          blend_chunk_dq_intent(out_list, begin, end, fl, has_parents, here, coarse, n_users, epoch,
+                                out_slots);
         });
         continue;
       }
@@ -582,17 +609,17 @@ void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
         for (std::size_t j = 0; j < n_users; ++j) {
           const Slot& s = here[j][c];
           const Reg q = s.stamp == epoch ? Ops::load(s.value) : Ops::identity();
-          residuals[j] =
-              parent_any[j] ? Ops::residual(Ops::finish_average(parent_acc[j], weight_total), q)
-                            : q;
+          residuals[j] = parent_any[j]
+                             ? Ops::residual(Ops::finish_average(parent_acc[j], weight_total), q)
+                             : q;
           magnitudes[j] = Ops::magnitude(residuals[j]);
         }
         const Reg residual = blend_residuals<Ops>(rule, residuals, magnitudes, n_users, user_count);
-        Ops::store(out_slots[c].value,
-                   parent_any[n_users]
-                       ? Ops::compose(Ops::finish_average(parent_acc[n_users], weight_total),
-                                      residual)
-                       : residual);
+        Ops::store(
+            out_slots[c].value,
+            parent_any[n_users]
+                ? Ops::compose(Ops::finish_average(parent_acc[n_users], weight_total), residual)
+                : residual);
       }
     });
   }
@@ -878,8 +905,8 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
       ws.pool.for_chunks(n_changed, 4096, [&](std::size_t begin, std::size_t end) {
         for (std::size_t i = begin; i < end; ++i) {
           const std::uint32_t v = changed_union[i];
-          ws.moved[i] = from_local(
-              ws.dq_merged.levels[0].val(v).apply(local.to_local(base.positions[v])));
+          ws.moved[i] =
+              from_local(ws.dq_merged.levels[0].val(v).apply(local.to_local(base.positions[v])));
         }
       });
       merged.positions.indices.resize(n_changed);

@@ -112,16 +112,17 @@ inline void face_rotation_kernel_x2(const Vec3f (&p)[2][6], Quat (&out)[2], bool
   auto dot3 = [&](const D3& u, const D3& v) {
     return add(add(mul(u.x, v.x), mul(u.y, v.y)), mul(u.z, v.z));
   };
-  auto scale = [&](const D3& u, __m128d s) -> D3 { return {mul(u.x, s), mul(u.y, s), mul(u.z, s)}; };
+  auto scale = [&](const D3& u, __m128d s) -> D3 {
+    return {mul(u.x, s), mul(u.y, s), mul(u.z, s)};
+  };
   const D3 a0 = load(0), a1 = load(1), a2 = load(2), b0 = load(3), b1 = load(4), b2 = load(5);
   const D3 e0a = sub(a1, a0), e1a = sub(a2, a0), e0b = sub(b1, b0), e1b = sub(b2, b0);
   const D3 ca = cross(e0a, e1a), cb = cross(e0b, e1b);
   const __m128d la2 = dot3(e0a, e0a), lb2 = dot3(e0b, e0b);
   const __m128d da2 = dot3(ca, ca), db2 = dot3(cb, cb);
   const __m128d tol = _mm_set1_pd(1e-10);
-  const __m128d valid =
-      _mm_and_pd(_mm_cmpgt_pd(da2, mul(mul(tol, la2), dot3(e1a, e1a))),
-                 _mm_cmpgt_pd(db2, mul(mul(tol, lb2), dot3(e1b, e1b))));
+  const __m128d valid = _mm_and_pd(_mm_cmpgt_pd(da2, mul(mul(tol, la2), dot3(e1a, e1a))),
+                                   _mm_cmpgt_pd(db2, mul(mul(tol, lb2), dot3(e1b, e1b))));
   const int mask = _mm_movemask_pd(valid);
   ok[0] = (mask & 1) != 0;
   ok[1] = (mask & 2) != 0;
@@ -143,15 +144,12 @@ inline void face_rotation_kernel_x2(const Vec3f (&p)[2][6], Quat (&out)[2], bool
               _mm_sub_pd(mul(c, yb.z), mul(s, xb.z))};
   auto entry = [&](__m128d rx, __m128d ry, __m128d rn, const __m128d& ax, const __m128d& ay,
                    const __m128d& an) { return add(add(mul(rx, ax), mul(ry, ay)), mul(rn, an)); };
-  const __m128d r[9] = {entry(xr.x, yr.x, nb.x, xa.x, ya.x, na.x),
-                        entry(xr.x, yr.x, nb.x, xa.y, ya.y, na.y),
-                        entry(xr.x, yr.x, nb.x, xa.z, ya.z, na.z),
-                        entry(xr.y, yr.y, nb.y, xa.x, ya.x, na.x),
-                        entry(xr.y, yr.y, nb.y, xa.y, ya.y, na.y),
-                        entry(xr.y, yr.y, nb.y, xa.z, ya.z, na.z),
-                        entry(xr.z, yr.z, nb.z, xa.x, ya.x, na.x),
-                        entry(xr.z, yr.z, nb.z, xa.y, ya.y, na.y),
-                        entry(xr.z, yr.z, nb.z, xa.z, ya.z, na.z)};
+  const __m128d r[9] = {
+      entry(xr.x, yr.x, nb.x, xa.x, ya.x, na.x), entry(xr.x, yr.x, nb.x, xa.y, ya.y, na.y),
+      entry(xr.x, yr.x, nb.x, xa.z, ya.z, na.z), entry(xr.y, yr.y, nb.y, xa.x, ya.x, na.x),
+      entry(xr.y, yr.y, nb.y, xa.y, ya.y, na.y), entry(xr.y, yr.y, nb.y, xa.z, ya.z, na.z),
+      entry(xr.z, yr.z, nb.z, xa.x, ya.x, na.x), entry(xr.z, yr.z, nb.z, xa.y, ya.y, na.y),
+      entry(xr.z, yr.z, nb.z, xa.z, ya.z, na.z)};
   alignas(16) double lanes[9][2];
   for (int i = 0; i < 9; ++i) _mm_store_pd(lanes[i], r[i]);
   for (int f = 0; f < 2; ++f) {
@@ -251,11 +249,11 @@ void compute_vertex_isometries(const Topology& topology, std::span<const Vec3f> 
   for (std::size_t k = first_scalar; k < scratch.faces.size(); ++k) {
     const Triangle& t = topology.triangles[scratch.faces[k]];
     Quat q;
-    scratch.face_offset[k] = face_rotation_kernel(base[t[0]], base[t[1]], base[t[2]],
-                                                  scratch.edited[t[0]], scratch.edited[t[1]],
-                                                  scratch.edited[t[2]], q)
-                                 ? Quat{q.w - 1.f, q.x, q.y, q.z}
-                                 : Quat{0, 0, 0, 0};
+    scratch.face_offset[k] =
+        face_rotation_kernel(base[t[0]], base[t[1]], base[t[2]], scratch.edited[t[0]],
+                             scratch.edited[t[1]], scratch.edited[t[2]], q)
+            ? Quat{q.w - 1.f, q.x, q.y, q.z}
+            : Quat{0, 0, 0, 0};
   }
   // 3. summed at their vertices
 #if defined(__SSE2__)
