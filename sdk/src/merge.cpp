@@ -301,6 +301,35 @@ void mark_sorted_union(SparseLevel<Value>& level, std::size_t lists, ListOf&& li
   }
 }
 
+/// Marks the union of several index lists on `level`, appending the nodes in increasing
+/// order, through a bitmap over the nodes (cleared again as it is read): linear in the
+/// lists' lengths plus node_count / 64, and no per-node record of which list holds it
+/// (mark_sorted_union gives that where it is needed).
+template <class Value, class ListOf>
+void mark_union(SparseLevel<Value>& level, std::size_t lists, ListOf&& list_of, std::uint32_t epoch,
+                std::vector<std::uint64_t>& bits) {
+  const std::size_t words = (level.slots.size() + 63) / 64;
+  if (bits.size() < words) bits.resize(words, 0);
+  std::size_t total = 0;
+  for (std::size_t j = 0; j < lists; ++j) {
+    const auto& l = list_of(j);
+    for (std::uint32_t v : l) bits[v >> 6] |= std::uint64_t{1} << (v & 63);
+    total += l.size();
+  }
+  level.list.reserve(level.list.size() + total);
+  for (std::size_t w = 0; w < words; ++w) {
+    std::uint64_t word = bits[w];
+    if (word == 0) continue;
+    bits[w] = 0;
+    do {
+      const auto v =
+          static_cast<std::uint32_t>(w * 64 + static_cast<unsigned>(__builtin_ctzll(word)));
+      level.mark(v, epoch);
+      word &= word - 1;
+    } while (word != 0);
+  }
+}
+
 /// Which parent links the pipeline follows: the K blended parents, or only the heaviest
 /// (the tree of the single-parent variant).
 struct ParentLinks {
@@ -708,6 +737,7 @@ struct Merger::Workspace {
   };
   std::vector<Lookup> lookups;
   std::vector<SoleChange> sole;
+  std::vector<std::uint64_t> union_bits;  ///< mark_union's bitmap, all zero between uses
   std::vector<Vec3f> moved;  ///< merged positions of the changed vertices, before listing
   detail::WorkerPool pool;
 
@@ -859,10 +889,10 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
       double iso_task_ms[kMaxDiffs] = {};
       ws.pool.run(users + 1, [&](std::size_t u) {
         if (u == users) {
-          mark_sorted_union(
+          mark_union(
               ws.dq_merged.levels[0], users,
               [&](std::size_t j) -> const auto& { return diffs[order[j]]->positions.indices; },
-              epoch, ws.sole);
+              epoch, ws.union_bits);
           mark_ancestors(links, level_count, ws.dq_merged, epoch);
           return;
         }
