@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <exception>
 #include <numeric>
 #include <string>
 #include <thread>
@@ -690,9 +691,9 @@ MethodTraits traits(MergeMethod m) {
 
 /// Canonical order of diffs by content, so the floating-point sums do not depend on the
 /// order the diffs arrived in.
-std::vector<std::size_t> canonical_order(std::span<const Diff* const> diffs) {
-  std::vector<std::uint64_t> keys(diffs.size());
-  for (std::size_t i = 0; i < diffs.size(); ++i) keys[i] = digest(*diffs[i]);
+/// `keys` holds each diff's digest().
+std::vector<std::size_t> canonical_order(std::span<const Diff* const> diffs,
+                                         std::span<const std::uint64_t> keys) {
   std::vector<std::size_t> order(diffs.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
   auto bytes_less = [](const auto& a, const auto& b) {
@@ -831,12 +832,25 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
   if (diffs.size() > kMaxDiffs)
     throw InvalidInput("merge: " + std::to_string(diffs.size()) + " diffs given, at most " +
                        std::to_string(kMaxDiffs) + " are merged at once");
+  // Each diff validated and digested in parallel (read-only); the first invalid one in
+  // argument order throws, as a serial loop would.
+  std::exception_ptr invalid[kMaxDiffs];
+  std::uint64_t keys[kMaxDiffs] = {};
+  ws.pool.run(diffs.size(), [&](std::size_t i) {
+    try {
+      validate(*diffs[i], base, "diff " + std::to_string(i));
+      keys[i] = digest(*diffs[i]);
+    } catch (...) {
+      invalid[i] = std::current_exception();
+    }
+  });
   for (std::size_t i = 0; i < diffs.size(); ++i)
-    validate(*diffs[i], base, "diff " + std::to_string(i));
+    if (invalid[i]) std::rethrow_exception(invalid[i]);
   if (!(frame.scale > 0) || !std::isfinite(frame.scale))
     throw InvalidInput("merge: the frame scale must be positive and finite");
 
-  const std::vector<std::size_t> order = canonical_order(diffs);
+  const std::vector<std::size_t> order =
+      canonical_order(diffs, std::span<const std::uint64_t>(keys, diffs.size()));
   const auto users = static_cast<std::uint32_t>(diffs.size());
   const std::size_t level_count = t.multiscale ? hierarchy_.levels().size() : 1;
   const ParentLinks links{&hierarchy_, t.tree};
