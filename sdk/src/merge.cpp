@@ -345,12 +345,17 @@ struct ParentLinks {
     const float* child_weight_sum;  ///< of this level's nodes (tree: child counts)
     std::size_t stride;
     bool tree;
-    std::uint32_t count(std::uint32_t node) const { return tree ? 1u : parent_count[node]; }
-    std::uint32_t parent_of(std::uint32_t node, std::uint32_t k) const {
-      return parent[std::size_t{node} * stride + k];
-    }
-    float weight_of(std::uint32_t node, std::uint32_t k) const {
-      return tree ? 1.f : weight[std::size_t{node} * stride + k];
+    /// A node's links: parents[k], weights[k] for k < count (the tree: the first parent,
+    /// weight 1).
+    struct Row {
+      const std::uint32_t* parents;
+      const float* weights;
+      std::uint32_t count;
+    };
+    Row row(std::uint32_t node) const {
+      static constexpr float kOne[1] = {1.f};
+      const std::size_t at = std::size_t{node} * stride;
+      return tree ? Row{parent + at, kOne, 1u} : Row{parent + at, weight + at, parent_count[node]};
     }
   };
   Level level(std::size_t i) const {
@@ -379,11 +384,11 @@ void decompose(const ParentLinks& links, std::size_t level_count,
     const ParentLinks::Level fl = links.level(i);
     for (std::uint32_t c : fine.list) {
       const Reg q = Ops::load(fine.val(c));
-      const std::uint32_t n = fl.count(c);
-      for (std::uint32_t k = 0; k < n; ++k) {
-        const std::uint32_t p = fl.parent_of(c, k);
+      const ParentLinks::Level::Row links_of_c = fl.row(c);
+      for (std::uint32_t k = 0; k < links_of_c.count; ++k) {
+        const std::uint32_t p = links_of_c.parents[k];
         Reg acc = coarse.mark(p, epoch) ? Ops::zero() : Ops::load(coarse.val(p));
-        Ops::add_offset(acc, fl.weight_of(c, k), q);
+        Ops::add_offset(acc, links_of_c.weights[k], q);
         Ops::store(coarse.val(p), acc);
       }
     }
@@ -465,10 +470,10 @@ void blend_chunk_dq_intent(const std::uint32_t* list, std::size_t begin, std::si
       for (std::size_t j = 0; j <= n_users; ++j) acc[j][lane] = dq_zero();
       float wt = 0;
       if (has_parents) {
-        const std::uint32_t n = fl.count(c);
-        for (std::uint32_t k = 0; k < n; ++k) {
-          const std::uint32_t p = fl.parent_of(c, k);
-          const float w = fl.weight_of(c, k);
+        const ParentLinks::Level::Row links_of_c = fl.row(c);
+        for (std::uint32_t k = 0; k < links_of_c.count; ++k) {
+          const std::uint32_t p = links_of_c.parents[k];
+          const float w = links_of_c.weights[k];
           wt += w;
           for (std::size_t j = 0; j <= n_users; ++j) {
             const Slot& s = coarse[j][p];
@@ -559,8 +564,9 @@ void mark_ancestors(const ParentLinks& links, std::size_t level_count, SparsePyr
     SparseLevel<Value>& coarse = merged.levels[i + 1];
     const ParentLinks::Level fl = links.level(i);
     for (std::uint32_t c : merged.levels[i].list) {
-      const std::uint32_t n = fl.count(c);
-      for (std::uint32_t k = 0; k < n; ++k) coarse.mark(fl.parent_of(c, k), epoch);
+      const ParentLinks::Level::Row links_of_c = fl.row(c);
+      for (std::uint32_t k = 0; k < links_of_c.count; ++k)
+        coarse.mark(links_of_c.parents[k], epoch);
     }
   }
 }
@@ -621,10 +627,10 @@ void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
         }
         float weight_total = 0;
         if (has_parents) {
-          const std::uint32_t n = fl.count(c);
-          for (std::uint32_t k = 0; k < n; ++k) {
-            const std::uint32_t p = fl.parent_of(c, k);
-            const float w = fl.weight_of(c, k);
+          const ParentLinks::Level::Row links_of_c = fl.row(c);
+          for (std::uint32_t k = 0; k < links_of_c.count; ++k) {
+            const std::uint32_t p = links_of_c.parents[k];
+            const float w = links_of_c.weights[k];
             weight_total += w;
             for (std::size_t j = 0; j <= n_users; ++j) {
               const Slot& s = coarse[j][p];
