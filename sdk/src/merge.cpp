@@ -746,6 +746,7 @@ struct Merger::Workspace {
   std::vector<SoleChange> sole;
   std::vector<std::uint64_t> union_bits;  ///< mark_union's bitmap, all zero between uses
   std::vector<Vec3f> moved;  ///< merged positions of the changed vertices, before listing
+  std::vector<std::size_t> chunk_offset;  ///< where each chunk of them starts in the list
   detail::WorkerPool pool;
 
   std::uint32_t next_epoch() {
@@ -949,33 +950,44 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
       count_work(ws.dq_users, users, ws.dq_merged, level_count, sizeof(DualQuat));
       t0 = Clock::now();
       const auto& changed_union = ws.dq_merged.levels[0].list;  // increasing
-      // Moved positions in parallel (disjoint writes), then listed in order.
+      // Moved positions and, per chunk, how many differ from the base, in parallel; then each
+      // chunk lists its own at its offset (the prefix sum of the counts): the same order as
+      // one serial pass, every write disjoint.
       const std::size_t n_changed = changed_union.size();
+      constexpr std::size_t kGrain = 4096;
+      const std::size_t chunks = (n_changed + kGrain - 1) / kGrain;
       if (ws.moved.size() < n_changed) ws.moved.resize(n_changed);
-      ws.pool.for_chunks(n_changed, 4096, [&](std::size_t begin, std::size_t end) {
+      if (ws.chunk_offset.size() < chunks + 1) ws.chunk_offset.resize(chunks + 1);
+      ws.pool.for_chunks(n_changed, kGrain, [&](std::size_t begin, std::size_t end) {
+        std::size_t kept = 0;
         for (std::size_t i = begin; i < end; ++i) {
           const std::uint32_t v = changed_union[i];
           ws.moved[i] =
               from_local(ws.dq_merged.levels[0].val(v).apply(local.to_local(base.positions[v])));
+          kept += !(ws.moved[i] == base.positions[v]);
+        }
+        ws.chunk_offset[begin / kGrain + 1] = kept;
+      });
+      ws.chunk_offset[0] = 0;
+      for (std::size_t c = 0; c < chunks; ++c) ws.chunk_offset[c + 1] += ws.chunk_offset[c];
+      const std::size_t kept_total = ws.chunk_offset[chunks];
+      merged.positions.indices.resize(kept_total);
+      merged.positions.values.resize(3 * kept_total);
+      ws.pool.for_chunks(n_changed, kGrain, [&](std::size_t begin, std::size_t end) {
+        std::size_t at = ws.chunk_offset[begin / kGrain];
+        for (std::size_t i = begin; i < end; ++i) {
+          const std::uint32_t v = changed_union[i];
+          const Vec3f& p = ws.moved[i];
+          if (!(p == base.positions[v])) {
+            merged.positions.indices[at] = v;
+            float* out = merged.positions.values.data() + 3 * at;
+            out[0] = p.x;
+            out[1] = p.y;
+            out[2] = p.z;
+            ++at;
+          }
         }
       });
-      merged.positions.indices.resize(n_changed);
-      merged.positions.values.resize(3 * n_changed);
-      std::size_t kept = 0;
-      for (std::size_t i = 0; i < n_changed; ++i) {
-        const std::uint32_t v = changed_union[i];
-        const Vec3f& p = ws.moved[i];
-        if (!(p == base.positions[v])) {
-          merged.positions.indices[kept] = v;
-          float* out = merged.positions.values.data() + 3 * kept;
-          out[0] = p.x;
-          out[1] = p.y;
-          out[2] = p.z;
-          ++kept;
-        }
-      }
-      merged.positions.indices.resize(kept);
-      merged.positions.values.resize(3 * kept);
       timings_.apply_ms += ms_since(t0);
     } else {
       with_translation_ops(t.blend, [&](auto ops) {
