@@ -302,9 +302,28 @@ void mark_sorted_union(SparseLevel<Value>& level, std::size_t lists, ListOf&& li
   }
 }
 
+/// Marks on `level`, in increasing order, the nodes whose bits are set in `bits`, and clears
+/// those bits again.
+template <class Value>
+void mark_set_bits(SparseLevel<Value>& level, std::vector<std::uint64_t>& bits,
+                   std::uint32_t epoch) {
+  const std::size_t words = (level.slots.size() + 63) / 64;
+  for (std::size_t w = 0; w < words; ++w) {
+    std::uint64_t word = bits[w];
+    if (word == 0) continue;
+    bits[w] = 0;
+    do {
+      const auto v =
+          static_cast<std::uint32_t>(w * 64 + static_cast<unsigned>(__builtin_ctzll(word)));
+      level.mark(v, epoch);
+      word &= word - 1;
+    } while (word != 0);
+  }
+}
+
 /// Marks the union of several index lists on `level`, appending the nodes in increasing
-/// order, through a bitmap over the nodes (cleared again as it is read): linear in the
-/// lists' lengths plus node_count / 64, and no per-node record of which list holds it
+/// order, through a bitmap over the nodes (all zero between uses): linear in the lists'
+/// lengths plus node_count / 64, and no per-node record of which list holds it
 /// (mark_sorted_union gives that where it is needed).
 template <class Value, class ListOf>
 void mark_union(SparseLevel<Value>& level, std::size_t lists, ListOf&& list_of, std::uint32_t epoch,
@@ -318,17 +337,7 @@ void mark_union(SparseLevel<Value>& level, std::size_t lists, ListOf&& list_of, 
     total += l.size();
   }
   level.list.reserve(level.list.size() + total);
-  for (std::size_t w = 0; w < words; ++w) {
-    std::uint64_t word = bits[w];
-    if (word == 0) continue;
-    bits[w] = 0;
-    do {
-      const auto v =
-          static_cast<std::uint32_t>(w * 64 + static_cast<unsigned>(__builtin_ctzll(word)));
-      level.mark(v, epoch);
-      word &= word - 1;
-    } while (word != 0);
-  }
+  mark_set_bits(level, bits, epoch);
 }
 
 /// Which parent links the pipeline follows: the K blended parents, or only the heaviest
@@ -559,15 +568,23 @@ void blend_chunk_dq_intent(const std::uint32_t* list, std::size_t begin, std::si
 /// on merged.levels[0].
 template <class Value>
 void mark_ancestors(const ParentLinks& links, std::size_t level_count, SparsePyramid<Value>& merged,
-                    std::uint32_t epoch) {
+                    std::uint32_t epoch, std::vector<std::uint64_t>& bits) {
+  // Through a bitmap of the coarser level (small enough to stay in cache, unlike the
+  // slots' stamps); each level's list comes out in increasing order. The blend computes
+  // every node on its own, so the order changes no result.
   for (std::size_t i = 0; i + 1 < level_count; ++i) {
     SparseLevel<Value>& coarse = merged.levels[i + 1];
+    const std::size_t words = (coarse.slots.size() + 63) / 64;
+    if (bits.size() < words) bits.resize(words, 0);
     const ParentLinks::Level fl = links.level(i);
     for (std::uint32_t c : merged.levels[i].list) {
       const ParentLinks::Level::Row links_of_c = fl.row(c);
-      for (std::uint32_t k = 0; k < links_of_c.count; ++k)
-        coarse.mark(links_of_c.parents[k], epoch);
+      for (std::uint32_t k = 0; k < links_of_c.count; ++k) {
+        const std::uint32_t p = links_of_c.parents[k];
+        bits[p >> 6] |= std::uint64_t{1} << (p & 63);
+      }
     }
+    mark_set_bits(coarse, bits, epoch);
   }
 }
 
@@ -914,7 +931,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
               ws.dq_merged.levels[0], users,
               [&](std::size_t j) -> const auto& { return diffs[order[j]]->positions.indices; },
               epoch, ws.union_bits);
-          mark_ancestors(links, level_count, ws.dq_merged, epoch);
+          mark_ancestors(links, level_count, ws.dq_merged, epoch, ws.union_bits);
           return;
         }
         const auto task_t0 = Clock::now();
@@ -1020,7 +1037,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
             out.levels[0],
             users, [&](std::size_t u) -> const auto& { return diffs[order[u]]->positions.indices; },
             epoch, ws.sole);
-        mark_ancestors(links, level_count, out, epoch);
+        mark_ancestors(links, level_count, out, epoch, ws.union_bits);
         blend_and_reconstruct<Ops>(links, level_count, std::span(ws.vec_users.data(), users), out,
                                    epoch, t.node_blend, ws.pool);
         timings_.blend_ms += ms_since(t0);
@@ -1091,7 +1108,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
       ws.pool.run(users, [&](std::size_t u) {
         decompose<Ops>(links, channel_levels, ws.vec_users[u], epoch);
       });
-      mark_ancestors(links, channel_levels, out, epoch);
+      mark_ancestors(links, channel_levels, out, epoch, ws.union_bits);
       blend_and_reconstruct<Ops>(links, channel_levels, std::span(ws.vec_users.data(), users), out,
                                  epoch, channel_blend, ws.pool);
       const auto& list = out.levels[0].list;  // increasing
