@@ -12,12 +12,16 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <exception>
 #include <numeric>
 #include <string>
 #include <thread>
+#include <type_traits>
 
 #include "csculpt/dual_quat.h"
 #include "csculpt/error.h"
+#include "dq_simd.h"
+#include "dq_soa.h"
 #include "vertex_isometry_kernel.h"
 #include "worker_pool.h"
 
@@ -41,38 +45,105 @@ constexpr std::array<MergeMethod, 8> kMethods = {MergeMethod::full,
 // ---------------------------------------------------------------------------------------
 // The two algebras the pipeline runs on.
 
-/// Unit dual quaternions (positions in the isometry methods).
+/// Unit dual quaternions (positions in the isometry methods). The arithmetic runs on `Reg`:
+/// on SSE2 two registers (dq_simd.h), lane by lane the scalar dual_quat.h operations in the
+/// same order, so both paths give bit-identical results.
 struct DqOps {
   using Value = DualQuat;
-  static Value identity() { return DualQuat::identity(); }
-  static Value zero() { return {{0, 0, 0, 0}, {0, 0, 0, 0}}; }
-  static void add(Value& acc, float w, const Value& q) { add_scaled(acc, w, q); }
-  static void add_offset(Value& acc, float w, const Value& q) { add_scaled_offset(acc, w, q); }
+#if defined(__SSE2__)
+  using Reg = detail::DQv;
+  static Reg load(const Value& q) {
+    return detail::dq_load(q);
+  }
+  static void store(Value& out, const Reg& q) {
+    detail::dq_store(out, q);
+  }
+  static Reg identity() {
+    return detail::dq_identity();
+  }
+  static Reg zero() {
+    return detail::dq_zero();
+  }
+  static void add(Reg& acc, float w, const Reg& q) {
+    detail::dq_add_scaled(acc, w, q);
+  }
+  static void add_offset(Reg& acc, float w, const Reg& q) {
+    detail::dq_add_scaled_offset(acc, w, q);
+  }
   /// Average of all children: the absent ones (identity) weigh total - listed.
-  static Value finish_average(Value acc, float total_weight) {
+  static Reg finish_average(const Reg& acc, float total_weight) {
+    using namespace detail;
+    return dq_canonical(dq_normalized(dq_add_real_w(acc, total_weight)));
+  }
+  static Reg residual(const Reg& parent, const Reg& node) {
+    return detail::dq_canonical(detail::dq_inverse_mul(parent, node));
+  }
+  static Reg compose(const Reg& parent, const Reg& residual) {
+    return detail::dq_canonical(detail::dq_mul(parent, residual));
+  }
+  static float magnitude(const Reg& q) {
+    return detail::dq_magnitude(q);
+  }
+  static Reg finish_blend(const Reg& acc, float magnitude_sum, std::uint32_t /*users*/) {
+    if (!(magnitude_sum > 0)) return identity();
+    return detail::dq_canonical(detail::dq_normalized(acc));
+  }
+  /// 1 + the sum of offsets (q - 1) that add_offset accumulated into zero(), normalised
+  static Reg compose_offsets(const Reg& acc) {
+    using namespace detail;
+    return dq_canonical(dq_normalized(dq_add_real_w(acc, 1.f)));
+  }
+  static float distance(const Reg& a, const Reg& b) {
+    return detail::dq_distance(a, b);
+  }
+#else
+  using Reg = DualQuat;
+  static Reg load(const Value& q) {
+    return q;
+  }
+  static void store(Value& out, const Reg& q) {
+    out = q;
+  }
+  static Reg identity() {
+    return DualQuat::identity();
+  }
+  static Reg zero() {
+    return {{0, 0, 0, 0}, {0, 0, 0, 0}};
+  }
+  static void add(Reg& acc, float w, const Reg& q) {
+    add_scaled(acc, w, q);
+  }
+  static void add_offset(Reg& acc, float w, const Reg& q) {
+    add_scaled_offset(acc, w, q);
+  }
+  /// Average of all children: the absent ones (identity) weigh total - listed.
+  static Reg finish_average(Reg acc, float total_weight) {
     acc.real.w += total_weight;
     return canonical(normalized(acc));
   }
-  static Value residual(const Value& parent, const Value& node) {
+  static Reg residual(const Reg& parent, const Reg& node) {
     return canonical(inverse(parent) * node);
   }
-  static Value compose(const Value& parent, const Value& residual) {
+  static Reg compose(const Reg& parent, const Reg& residual) {
     return canonical(parent * residual);
   }
-  static float magnitude(const Value& q) { return csculpt::magnitude(q); }
-  static Value finish_blend(const Value& acc, float magnitude_sum, std::uint32_t /*users*/) {
+  static float magnitude(const Reg& q) {
+    return csculpt::magnitude(q);
+  }
+  static Reg finish_blend(const Reg& acc, float magnitude_sum, std::uint32_t /*users*/) {
     if (!(magnitude_sum > 0)) return identity();
     return canonical(normalized(acc));
   }
   /// 1 + the sum of offsets (q - 1) that add_offset accumulated into zero(), normalised
-  static Value compose_offsets(Value acc) {
+  static Reg compose_offsets(Reg acc) {
     acc.real.w += 1.f;
     return canonical(normalized(acc));
   }
-  static float distance(const Value& a, const Value& b) {
+  static float distance(const Reg& a, const Reg& b) {
     const Quat dr = a.real - b.real, dd = a.dual - b.dual;
     return std::sqrt(dot(dr, dr) + dot(dd, dd));
   }
+#endif
 };
 
 /// How translations of several diffs combine at a node.
@@ -88,6 +159,9 @@ struct Vec4 {
 template <TranslationBlend Blend>
 struct VecOps {
   using Value = Vec4;
+  using Reg = Vec4;
+  static Reg load(const Value& q) { return q; }
+  static void store(Value& out, const Reg& q) { out = q; }
   static Value identity() { return {}; }
   static Value zero() { return {}; }
   static void add(Value& acc, float w, const Value& q) {
@@ -195,28 +269,75 @@ template <class Value, class ListOf>
 void mark_sorted_union(SparseLevel<Value>& level, std::size_t lists, ListOf&& list_of,
                        std::uint32_t epoch, std::vector<SoleChange>& sole) {
   constexpr std::uint32_t kEnd = 0xffffffffu;
-  std::size_t cursor[64] = {};
+  // The lists as raw ranges, read through cursors; an exhausted list reads kEnd.
+  const std::uint32_t* at[64];
+  const std::uint32_t* end[64];
+  const std::uint32_t* begin[64];
+  std::size_t total = 0;
+  for (std::size_t j = 0; j < lists; ++j) {
+    const auto& l = list_of(j);
+    begin[j] = at[j] = l.data();
+    end[j] = l.data() + l.size();
+    total += l.size();
+  }
   sole.clear();
+  sole.reserve(total);
+  level.list.reserve(level.list.size() + total);
+  auto head = [&](std::size_t j) { return at[j] != end[j] ? *at[j] : kEnd; };
   for (;;) {
     std::uint32_t next = kEnd;
-    for (std::size_t j = 0; j < lists; ++j) {
-      const auto& l = list_of(j);
-      if (cursor[j] < l.size()) next = std::min(next, l[cursor[j]]);
-    }
+    for (std::size_t j = 0; j < lists; ++j) next = std::min(next, head(j));
     if (next == kEnd) return;
     level.mark(next, epoch);
     SoleChange who{kNoOwner, 0};
     std::uint32_t holders = 0;
     for (std::size_t j = 0; j < lists; ++j) {
-      const auto& l = list_of(j);
-      if (cursor[j] < l.size() && l[cursor[j]] == next) {
-        who = {static_cast<std::uint32_t>(j), static_cast<std::uint32_t>(cursor[j])};
+      if (head(j) == next) {
+        who = {static_cast<std::uint32_t>(j), static_cast<std::uint32_t>(at[j] - begin[j])};
         ++holders;
-        ++cursor[j];
+        ++at[j];
       }
     }
     sole.push_back(holders == 1 ? who : SoleChange{kNoOwner, 0});
   }
+}
+
+/// Marks on `level`, in increasing order, the nodes whose bits are set in `bits`, and clears
+/// those bits again.
+template <class Value>
+void mark_set_bits(SparseLevel<Value>& level, std::vector<std::uint64_t>& bits,
+                   std::uint32_t epoch) {
+  const std::size_t words = (level.slots.size() + 63) / 64;
+  for (std::size_t w = 0; w < words; ++w) {
+    std::uint64_t word = bits[w];
+    if (word == 0) continue;
+    bits[w] = 0;
+    do {
+      const auto v =
+          static_cast<std::uint32_t>(w * 64 + static_cast<unsigned>(__builtin_ctzll(word)));
+      level.mark(v, epoch);
+      word &= word - 1;
+    } while (word != 0);
+  }
+}
+
+/// Marks the union of several index lists on `level`, appending the nodes in increasing
+/// order, through a bitmap over the nodes (all zero between uses): linear in the lists'
+/// lengths plus node_count / 64, and no per-node record of which list holds it
+/// (mark_sorted_union gives that where it is needed).
+template <class Value, class ListOf>
+void mark_union(SparseLevel<Value>& level, std::size_t lists, ListOf&& list_of, std::uint32_t epoch,
+                std::vector<std::uint64_t>& bits) {
+  const std::size_t words = (level.slots.size() + 63) / 64;
+  if (bits.size() < words) bits.resize(words, 0);
+  std::size_t total = 0;
+  for (std::size_t j = 0; j < lists; ++j) {
+    const auto& l = list_of(j);
+    for (std::uint32_t v : l) bits[v >> 6] |= std::uint64_t{1} << (v & 63);
+    total += l.size();
+  }
+  level.list.reserve(level.list.size() + total);
+  mark_set_bits(level, bits, epoch);
 }
 
 /// Which parent links the pipeline follows: the K blended parents, or only the heaviest
@@ -225,20 +346,38 @@ struct ParentLinks {
   const Hierarchy* hierarchy = nullptr;
   bool tree = false;
 
+  /// One level's links as raw arrays, hoisted out of the per-node loops.
+  struct Level {
+    const std::uint32_t* parent;
+    const float* weight;
+    const std::uint8_t* parent_count;
+    const float* child_weight_sum;  ///< of this level's nodes (tree: child counts)
+    std::size_t stride;
+    bool tree;
+    /// A node's links: parents[k], weights[k] for k < count (the tree: the first parent,
+    /// weight 1).
+    struct Row {
+      const std::uint32_t* parents;
+      const float* weights;
+      std::uint32_t count;
+    };
+    Row row(std::uint32_t node) const {
+      static constexpr float kOne[1] = {1.f};
+      const std::size_t at = std::size_t{node} * stride;
+      return tree ? Row{parent + at, kOne, 1u} : Row{parent + at, weight + at, parent_count[node]};
+    }
+  };
+  Level level(std::size_t i) const {
+    const HierarchyLevel& l = hierarchy->levels()[i];
+    return {l.parent.data(),       l.parent_weight.data(),
+            l.parent_count.data(), tree ? l.tree_child_count.data() : l.child_weight_sum.data(),
+            hierarchy->stride(),   tree};
+  }
   std::uint32_t count(std::size_t level, std::uint32_t node) const {
     return tree ? 1u : hierarchy->levels()[level].parent_count[node];
   }
   std::uint32_t parent(std::size_t level, std::uint32_t node, std::uint32_t k) const {
     return hierarchy->levels()[level].parent[std::size_t{node} * hierarchy->stride() + k];
-  }
-  float weight(std::size_t level, std::uint32_t node, std::uint32_t k) const {
-    return tree ? 1.f
-                : hierarchy->levels()[level]
-                      .parent_weight[std::size_t{node} * hierarchy->stride() + k];
-  }
-  float child_weight_sum(std::size_t level, std::uint32_t node) const {
-    const HierarchyLevel& l = hierarchy->levels()[level];
-    return tree ? l.tree_child_count[node] : l.child_weight_sum[node];
   }
 };
 
@@ -247,20 +386,24 @@ struct ParentLinks {
 template <class Ops>
 void decompose(const ParentLinks& links, std::size_t level_count,
                SparsePyramid<typename Ops::Value>& pyramid, std::uint32_t epoch) {
+  using Reg = typename Ops::Reg;
   for (std::size_t i = 0; i + 1 < level_count; ++i) {
     SparseLevel<typename Ops::Value>& fine = pyramid.levels[i];
     SparseLevel<typename Ops::Value>& coarse = pyramid.levels[i + 1];
+    const ParentLinks::Level fl = links.level(i);
     for (std::uint32_t c : fine.list) {
-      const auto& q = fine.val(c);
-      const std::uint32_t n = links.count(i, c);
-      for (std::uint32_t k = 0; k < n; ++k) {
-        const std::uint32_t p = links.parent(i, c, k);
-        if (coarse.mark(p, epoch)) coarse.val(p) = Ops::zero();
-        Ops::add_offset(coarse.val(p), links.weight(i, c, k), q);
+      const Reg q = Ops::load(fine.val(c));
+      const ParentLinks::Level::Row links_of_c = fl.row(c);
+      for (std::uint32_t k = 0; k < links_of_c.count; ++k) {
+        const std::uint32_t p = links_of_c.parents[k];
+        Reg acc = coarse.mark(p, epoch) ? Ops::zero() : Ops::load(coarse.val(p));
+        Ops::add_offset(acc, links_of_c.weights[k], q);
+        Ops::store(coarse.val(p), acc);
       }
     }
+    const float* child_weight_sum = links.level(i + 1).child_weight_sum;
     for (std::uint32_t p : coarse.list)
-      coarse.val(p) = Ops::finish_average(coarse.val(p), links.child_weight_sum(i + 1, p));
+      Ops::store(coarse.val(p), Ops::finish_average(Ops::load(coarse.val(p)), child_weight_sum[p]));
   }
 }
 
@@ -280,9 +423,9 @@ enum class NodeBlend { magnitude, intent };
 constexpr std::size_t kMaxDiffs = 64;
 
 template <class Ops>
-typename Ops::Value blend_residuals(NodeBlend rule, const typename Ops::Value* r, const float* m,
-                                    std::size_t n, std::uint32_t users) {
-  typename Ops::Value acc = Ops::zero();
+typename Ops::Reg blend_residuals(NodeBlend rule, const typename Ops::Reg* r, const float* m,
+                                  std::size_t n, std::uint32_t users) {
+  typename Ops::Reg acc = Ops::zero();
   float magnitude_sum = 0;
   if (rule == NodeBlend::magnitude) {
     for (std::size_t j = 0; j < n; ++j) {
@@ -309,36 +452,189 @@ typename Ops::Value blend_residuals(NodeBlend rule, const typename Ops::Value* r
   return Ops::compose_offsets(acc);
 }
 
+#if defined(__SSE2__)
+/// The intent blend of dual quaternions (DqOps, NodeBlend::intent) for the nodes
+/// list[begin, end) of one level, four nodes at a time in structure-of-arrays registers
+/// (dq_soa.h): the parent sums are gathered per node as before, the rest of the arithmetic
+/// runs one node per lane, lane by lane the scalar code's operations, so bit-identical.
+template <class Slot>
+void blend_chunk_dq_intent(const std::uint32_t* list, std::size_t begin, std::size_t end,
+                           const ParentLinks::Level& fl, bool has_parents, const Slot* const* here,
+                           const Slot* const* coarse, std::size_t n_users, std::uint32_t epoch,
+                           Slot* out_slots) {
+  using namespace detail;
+  const __m128 zero = _mm_setzero_ps();
+  DQv acc[kMaxDiffs + 1][4];
+  DQv q[kMaxDiffs][4];
+  std::uint32_t any_bits[kMaxDiffs + 1];
+  DQ4 res[kMaxDiffs];
+  __m128 mag[kMaxDiffs];
+  for (std::size_t g = begin; g < end; g += 4) {
+    const std::size_t lanes = std::min<std::size_t>(4, end - g);
+    float weight_total[4];
+    for (std::size_t j = 0; j <= n_users; ++j) any_bits[j] = 0;
+    for (std::size_t lane = 0; lane < 4; ++lane) {
+      // lanes past the end repeat the first node; their results are not stored
+      const std::uint32_t c = list[g + (lane < lanes ? lane : 0)];
+      for (std::size_t j = 0; j <= n_users; ++j) acc[j][lane] = dq_zero();
+      float wt = 0;
+      if (has_parents) {
+        const ParentLinks::Level::Row links_of_c = fl.row(c);
+        for (std::uint32_t k = 0; k < links_of_c.count; ++k) {
+          const std::uint32_t p = links_of_c.parents[k];
+          const float w = links_of_c.weights[k];
+          wt += w;
+          for (std::size_t j = 0; j <= n_users; ++j) {
+            const Slot& s = coarse[j][p];
+            if (s.stamp == epoch) {
+              dq_add_scaled_offset(acc[j][lane], w, dq_load(s.value));
+              any_bits[j] |= 1u << lane;
+            }
+          }
+        }
+      }
+      weight_total[lane] = wt;
+      for (std::size_t j = 0; j < n_users; ++j) {
+        const Slot& s = here[j][c];
+        q[j][lane] = s.stamp == epoch ? dq_load(s.value) : dq_identity();
+      }
+    }
+    const __m128 wt4 = _mm_loadu_ps(weight_total);
+    auto mask_of = [](std::uint32_t bits) {
+      return _mm_castsi128_ps(_mm_set_epi32(bits & 8 ? -1 : 0, bits & 4 ? -1 : 0, bits & 2 ? -1 : 0,
+                                            bits & 1 ? -1 : 0));
+    };
+    // finish_average: real w += total weight, normalised, canonical
+    auto parent_blend = [&](std::size_t j) {
+      DQ4 a = dq4_from(acc[j][0], acc[j][1], acc[j][2], acc[j][3]);
+      a.c[0] = _mm_add_ps(a.c[0], wt4);
+      return dq4_canonical(dq4_normalized(a));
+    };
+    for (std::size_t j = 0; j < n_users; ++j) {
+      const DQ4 qj = dq4_from(q[j][0], q[j][1], q[j][2], q[j][3]);
+      if (any_bits[j] != 0) {
+        const DQ4 r = dq4_canonical(dq4_mul(dq4_inverse(parent_blend(j)), qj));
+        res[j] = dq4_select(mask_of(any_bits[j]), r, qj);
+      } else {
+        res[j] = qj;
+      }
+      // residuals and stored values are canonical already
+      mag[j] = dq4_magnitude_of_canonical(res[j]);
+    }
+    // intent: acc = sum_j c_j (r_j - 1), c_j = m_j / sum_k s_jk m_k over active j, k
+    DQ4 sum;
+    for (__m128& x : sum.c) x = zero;
+    __m128 magnitude_sum = zero;
+    for (std::size_t j = 0; j < n_users; ++j) {
+      const __m128 active_j = _mm_cmpgt_ps(mag[j], zero);
+      if (_mm_movemask_ps(active_j) == 0) continue;
+      __m128 same = zero;
+      for (std::size_t k = 0; k < n_users; ++k) {
+        const __m128 active_k = _mm_cmpgt_ps(mag[k], zero);
+        __m128 term;
+        if (k == j) {
+          term = mag[k];  // closeness 1: s m_k = m_k exactly
+        } else {
+          const __m128 larger = _mm_max_ps(mag[k], mag[j]);  // std::max(m_j, m_k)
+          const __m128 closeness = _mm_max_ps(               // std::max(0.f, x)
+              _mm_sub_ps(_mm_set1_ps(1.f), _mm_div_ps(dq4_distance(res[j], res[k]), larger)), zero);
+          term = _mm_mul_ps(_mm_mul_ps(closeness, closeness), mag[k]);
+        }
+        same = _mm_add_ps(same, _mm_and_ps(active_k, term));  // + 0 where inactive: exact
+      }
+      const __m128 w = _mm_div_ps(mag[j], same);
+      sum.c[0] = _mm_add_ps(
+          sum.c[0], _mm_and_ps(active_j, _mm_mul_ps(w, _mm_sub_ps(res[j].c[0], _mm_set1_ps(1.f)))));
+#pragma GCC unroll 8
+      for (int i = 1; i < 8; ++i)
+        sum.c[i] = _mm_add_ps(sum.c[i], _mm_and_ps(active_j, _mm_mul_ps(w, res[j].c[i])));
+      magnitude_sum = _mm_add_ps(magnitude_sum, _mm_and_ps(active_j, mag[j]));
+    }
+    sum.c[0] = _mm_add_ps(sum.c[0], _mm_set1_ps(1.f));
+    DQ4 blended = dq4_select(_mm_cmpgt_ps(magnitude_sum, zero), dq4_canonical(dq4_normalized(sum)),
+                             dq4_identity());
+    if (any_bits[n_users] != 0)
+      blended = dq4_select(mask_of(any_bits[n_users]),
+                           dq4_canonical(dq4_mul(parent_blend(n_users), blended)), blended);
+    DQv out[4];
+    dq4_to(blended, out);
+    for (std::size_t lane = 0; lane < lanes; ++lane)
+      dq_store(out_slots[list[g + lane]].value, out[lane]);
+  }
+}
+#endif
+
+/// Marks the nodes the result needs above level 0: the ancestors of the vertices listed
+/// on merged.levels[0].
+template <class Value>
+void mark_ancestors(const ParentLinks& links, std::size_t level_count, SparsePyramid<Value>& merged,
+                    std::uint32_t epoch, std::vector<std::uint64_t>& bits) {
+  // Through a bitmap of the coarser level (small enough to stay in cache, unlike the
+  // slots' stamps); each level's list comes out in increasing order. The blend computes
+  // every node on its own, so the order changes no result.
+  for (std::size_t i = 0; i + 1 < level_count; ++i) {
+    SparseLevel<Value>& coarse = merged.levels[i + 1];
+    const std::size_t words = (coarse.slots.size() + 63) / 64;
+    if (bits.size() < words) bits.resize(words, 0);
+    const ParentLinks::Level fl = links.level(i);
+    for (std::uint32_t c : merged.levels[i].list) {
+      const ParentLinks::Level::Row links_of_c = fl.row(c);
+      for (std::uint32_t k = 0; k < links_of_c.count; ++k) {
+        const std::uint32_t p = links_of_c.parents[k];
+        bits[p >> 6] |= std::uint64_t{1} << (p & 63);
+      }
+    }
+    mark_set_bits(coarse, bits, epoch);
+  }
+}
+
 /// Residuals of every diff at each needed node, blended per node, recomposed from the
 /// coarsest level down (paper §3.1 "Final Merged Mesh"). Fills merged.levels[0] for the
-/// nodes listed there.
+/// nodes listed there, and the coarser levels for the nodes mark_ancestors() listed.
 template <class Ops>
 void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
                            std::span<SparsePyramid<typename Ops::Value>> users,
                            SparsePyramid<typename Ops::Value>& merged, std::uint32_t epoch,
                            NodeBlend rule, detail::WorkerPool& pool) {
   using Value = typename Ops::Value;
-  // The nodes the result needs: ancestors of the vertices some diff changed.
-  for (std::size_t i = 0; i + 1 < level_count; ++i) {
-    SparseLevel<Value>& coarse = merged.levels[i + 1];
-    for (std::uint32_t c : merged.levels[i].list) {
-      const std::uint32_t n = links.count(i, c);
-      for (std::uint32_t k = 0; k < n; ++k) coarse.mark(links.parent(i, c, k), epoch);
-    }
-  }
+  using Reg = typename Ops::Reg;
+  using Slot = typename SparseLevel<Value>::Slot;
   const auto user_count = static_cast<std::uint32_t>(users.size());
+  const std::size_t n_users = users.size();
   for (std::size_t level = level_count; level-- > 0;) {
     SparseLevel<Value>& out = merged.levels[level];
     const bool has_parents = level + 1 < level_count;
+    const ParentLinks::Level fl = links.level(level);
+    // Slot arrays of every diff at this level and at the next coarser one, then the merged
+    // result's coarser level last.
+    const Slot* here[kMaxDiffs];
+    const Slot* coarse[kMaxDiffs + 1];
+    for (std::size_t j = 0; j < n_users; ++j) {
+      here[j] = users[j].levels[level].slots.data();
+      coarse[j] = has_parents ? users[j].levels[level + 1].slots.data() : nullptr;
+    }
+    coarse[n_users] = has_parents ? merged.levels[level + 1].slots.data() : nullptr;
+    Slot* out_slots = out.slots.data();
+    const std::uint32_t* out_list = out.list.data();
     // Each node reads only coarser, finished levels and writes only itself.
+#if defined(__SSE2__)
+    if constexpr (std::is_same_v<Ops, DqOps>) {
+      if (rule == NodeBlend::intent) {
+        pool.for_chunks(out.list.size(), 512, [&](std::size_t begin, std::size_t end) {
+          blend_chunk_dq_intent(out_list, begin, end, fl, has_parents, here, coarse, n_users, epoch,
+                                out_slots);
+        });
+        continue;
+      }
+    }
+#endif
     pool.for_chunks(out.list.size(), 2048, [&](std::size_t begin, std::size_t end) {
-      Value residuals[kMaxDiffs];
+      Reg residuals[kMaxDiffs];
       float magnitudes[kMaxDiffs];
-      Value parent_acc[kMaxDiffs + 1];  // the diffs' parent blends, then the merged one
+      Reg parent_acc[kMaxDiffs + 1];  // the diffs' parent blends, then the merged one
       bool parent_any[kMaxDiffs + 1];
-      const std::size_t n_users = users.size();
       for (std::size_t i = begin; i < end; ++i) {
-        const std::uint32_t c = out.list[i];
+        const std::uint32_t c = out_list[i];
         // One pass over the node's parent links serves every diff and the merged result.
         // Sum of w (q - 1) over parents that differ from the identity; the identity's share
         // (the weights' total) is added once at the end.
@@ -348,38 +644,35 @@ void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
         }
         float weight_total = 0;
         if (has_parents) {
-          const SparseLevel<Value>& merged_coarse = merged.levels[level + 1];
-          const std::uint32_t n = links.count(level, c);
-          for (std::uint32_t k = 0; k < n; ++k) {
-            const std::uint32_t p = links.parent(level, c, k);
-            const float w = links.weight(level, c, k);
+          const ParentLinks::Level::Row links_of_c = fl.row(c);
+          for (std::uint32_t k = 0; k < links_of_c.count; ++k) {
+            const std::uint32_t p = links_of_c.parents[k];
+            const float w = links_of_c.weights[k];
             weight_total += w;
-            for (std::size_t j = 0; j < n_users; ++j) {
-              const SparseLevel<Value>& coarse = users[j].levels[level + 1];
-              if (coarse.has(p, epoch)) {
-                Ops::add_offset(parent_acc[j], w, coarse.val(p));
+            for (std::size_t j = 0; j <= n_users; ++j) {
+              const Slot& s = coarse[j][p];
+              if (s.stamp == epoch) {
+                Ops::add_offset(parent_acc[j], w, Ops::load(s.value));
                 parent_any[j] = true;
               }
-            }
-            if (merged_coarse.has(p, epoch)) {
-              Ops::add_offset(parent_acc[n_users], w, merged_coarse.val(p));
-              parent_any[n_users] = true;
             }
           }
         }
         // identity exactly when no parent differs from it, so untouched regions stay exact
-        auto parent_of = [&](std::size_t j) {
-          return parent_any[j] ? Ops::finish_average(parent_acc[j], weight_total) : Ops::identity();
-        };
         for (std::size_t j = 0; j < n_users; ++j) {
-          const SparseLevel<Value>& ul = users[j].levels[level];
-          const Value q = ul.has(c, epoch) ? ul.val(c) : Ops::identity();
-          residuals[j] = parent_any[j] ? Ops::residual(parent_of(j), q) : q;
+          const Slot& s = here[j][c];
+          const Reg q = s.stamp == epoch ? Ops::load(s.value) : Ops::identity();
+          residuals[j] = parent_any[j]
+                             ? Ops::residual(Ops::finish_average(parent_acc[j], weight_total), q)
+                             : q;
           magnitudes[j] = Ops::magnitude(residuals[j]);
         }
-        const Value residual =
-            blend_residuals<Ops>(rule, residuals, magnitudes, n_users, user_count);
-        out.val(c) = parent_any[n_users] ? Ops::compose(parent_of(n_users), residual) : residual;
+        const Reg residual = blend_residuals<Ops>(rule, residuals, magnitudes, n_users, user_count);
+        Ops::store(
+            out_slots[c].value,
+            parent_any[n_users]
+                ? Ops::compose(Ops::finish_average(parent_acc[n_users], weight_total), residual)
+                : residual);
       }
     });
   }
@@ -421,9 +714,9 @@ MethodTraits traits(MergeMethod m) {
 
 /// Canonical order of diffs by content, so the floating-point sums do not depend on the
 /// order the diffs arrived in.
-std::vector<std::size_t> canonical_order(std::span<const Diff* const> diffs) {
-  std::vector<std::uint64_t> keys(diffs.size());
-  for (std::size_t i = 0; i < diffs.size(); ++i) keys[i] = digest(*diffs[i]);
+/// `keys` holds each diff's digest().
+std::vector<std::size_t> canonical_order(std::span<const Diff* const> diffs,
+                                         std::span<const std::uint64_t> keys) {
   std::vector<std::size_t> order(diffs.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
   auto bytes_less = [](const auto& a, const auto& b) {
@@ -468,6 +761,9 @@ struct Merger::Workspace {
   };
   std::vector<Lookup> lookups;
   std::vector<SoleChange> sole;
+  std::vector<std::uint64_t> union_bits;  ///< mark_union's bitmap, all zero between uses
+  std::vector<Vec3f> moved;  ///< merged positions of the changed vertices, before listing
+  std::vector<std::size_t> chunk_offset;  ///< where each chunk of them starts in the list
   detail::WorkerPool pool;
 
   std::uint32_t next_epoch() {
@@ -560,12 +856,25 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
   if (diffs.size() > kMaxDiffs)
     throw InvalidInput("merge: " + std::to_string(diffs.size()) + " diffs given, at most " +
                        std::to_string(kMaxDiffs) + " are merged at once");
+  // Each diff validated and digested in parallel (read-only); the first invalid one in
+  // argument order throws, as a serial loop would.
+  std::exception_ptr invalid[kMaxDiffs];
+  std::uint64_t keys[kMaxDiffs] = {};
+  ws.pool.run(diffs.size(), [&](std::size_t i) {
+    try {
+      validate(*diffs[i], base, "diff " + std::to_string(i));
+      keys[i] = digest(*diffs[i]);
+    } catch (...) {
+      invalid[i] = std::current_exception();
+    }
+  });
   for (std::size_t i = 0; i < diffs.size(); ++i)
-    validate(*diffs[i], base, "diff " + std::to_string(i));
+    if (invalid[i]) std::rethrow_exception(invalid[i]);
   if (!(frame.scale > 0) || !std::isfinite(frame.scale))
     throw InvalidInput("merge: the frame scale must be positive and finite");
 
-  const std::vector<std::size_t> order = canonical_order(diffs);
+  const std::vector<std::size_t> order =
+      canonical_order(diffs, std::span<const std::uint64_t>(keys, diffs.size()));
   const auto users = static_cast<std::uint32_t>(diffs.size());
   const std::size_t level_count = t.multiscale ? hierarchy_.levels().size() : 1;
   const ParentLinks links{&hierarchy_, t.tree};
@@ -590,17 +899,12 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
   {
     auto t0 = Clock::now();
     const std::uint32_t epoch = ws.next_epoch();
-    // edited-position lookups per diff
+    // edited-position lookups per diff (filled in the diff's own task below)
     for (std::uint32_t u = 0; u < users; ++u) {
       auto& lk = ws.lookups[u];
       if (lk.slot.size() < vertex_count) {
         lk.slot.resize(vertex_count);
         lk.stamp.resize(vertex_count, 0);
-      }
-      const AttributeDiff& pd = diffs[order[u]]->positions;
-      for (std::uint32_t i = 0; i < pd.indices.size(); ++i) {
-        lk.slot[pd.indices[i]] = i;
-        lk.stamp[pd.indices[i]] = epoch;
       }
     }
     auto edited_of = [&](std::uint32_t u) {
@@ -616,46 +920,91 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
       if (ws.dq_users.size() < users) ws.dq_users.resize(users);
       for (std::uint32_t u = 0; u < users; ++u) ws.dq_users[u].reserve(hierarchy_, level_count);
       ws.dq_merged.reserve(hierarchy_, level_count);
-      // Each diff's isometries and averages are independent: one task per diff.
-      ws.pool.run(users, [&](std::size_t u) {
+      // One region, one task per diff (its lookup, isometries and averages: independent of
+      // the other diffs), plus one task, listed last so that the thread that finishes first
+      // takes it, for the nodes the result needs (the union of the changed vertices and
+      // their ancestors): it writes only the merged pyramid's marks, so no barrier between.
+      double iso_task_ms[kMaxDiffs] = {};
+      ws.pool.run(users + 1, [&](std::size_t u) {
+        if (u == users) {
+          mark_union(
+              ws.dq_merged.levels[0], users,
+              [&](std::size_t j) -> const auto& { return diffs[order[j]]->positions.indices; },
+              epoch, ws.union_bits);
+          mark_ancestors(links, level_count, ws.dq_merged, epoch, ws.union_bits);
+          return;
+        }
+        const auto task_t0 = Clock::now();
         auto& lk = ws.lookups[u];
+        const AttributeDiff& pd = diffs[order[u]]->positions;
+        for (std::uint32_t i = 0; i < pd.indices.size(); ++i) {
+          lk.slot[pd.indices[i]] = i;
+          lk.stamp[pd.indices[i]] = epoch;
+        }
         lk.isometry.resize(vertex_count, base.face_count());
         auto& level0 = ws.dq_users[u].levels[0];
         detail::compute_vertex_isometries(
-            hierarchy_.topology(), base.positions, diffs[order[u]]->positions.indices,
+            hierarchy_.topology(), base.positions, pd.indices,
             edited_of(static_cast<std::uint32_t>(u)), lk.isometry,
             [&level0, epoch](std::uint32_t v, const DualQuat& q) {
               level0.slots[v] = {q, epoch};
             },
             lk.touched, local);
         level0.list.assign(lk.touched.begin(), lk.touched.end());
-      });
-      timings_.isometry_ms += ms_since(t0);
-      t0 = Clock::now();
-      ws.pool.run(users, [&](std::size_t u) {
+        iso_task_ms[u] = ms_since(task_t0);
         decompose<DqOps>(links, level_count, ws.dq_users[u], epoch);
       });
-      timings_.decompose_ms += ms_since(t0);
+      // The region's time split: isometries = the longest diff's isometry part, the rest
+      // (decomposition and its imbalance) to decompose.
+      const double region_ms = ms_since(t0);
+      const double iso_ms = *std::max_element(iso_task_ms, iso_task_ms + users);
+      timings_.isometry_ms += std::min(iso_ms, region_ms);
+      timings_.decompose_ms += std::max(0.0, region_ms - iso_ms);
       t0 = Clock::now();
-      mark_sorted_union(
-          ws.dq_merged.levels[0],
-          users, [&](std::size_t u) -> const auto& { return diffs[order[u]]->positions.indices; },
-          epoch, ws.sole);
       blend_and_reconstruct<DqOps>(links, level_count, std::span(ws.dq_users.data(), users),
                                    ws.dq_merged, epoch, t.node_blend, ws.pool);
       timings_.blend_ms += ms_since(t0);
       count_work(ws.dq_users, users, ws.dq_merged, level_count, sizeof(DualQuat));
       t0 = Clock::now();
       const auto& changed_union = ws.dq_merged.levels[0].list;  // increasing
-      for (std::size_t i = 0; i < changed_union.size(); ++i) {
-        const std::uint32_t v = changed_union[i];
-        const Vec3f p =
-            from_local(ws.dq_merged.levels[0].val(v).apply(local.to_local(base.positions[v])));
-        if (!(p == base.positions[v])) {
-          merged.positions.indices.push_back(v);
-          merged.positions.values.insert(merged.positions.values.end(), {p.x, p.y, p.z});
+      // Moved positions and, per chunk, how many differ from the base, in parallel; then each
+      // chunk lists its own at its offset (the prefix sum of the counts): the same order as
+      // one serial pass, every write disjoint.
+      const std::size_t n_changed = changed_union.size();
+      constexpr std::size_t kGrain = 4096;
+      const std::size_t chunks = (n_changed + kGrain - 1) / kGrain;
+      if (ws.moved.size() < n_changed) ws.moved.resize(n_changed);
+      if (ws.chunk_offset.size() < chunks + 1) ws.chunk_offset.resize(chunks + 1);
+      ws.pool.for_chunks(n_changed, kGrain, [&](std::size_t begin, std::size_t end) {
+        std::size_t kept = 0;
+        for (std::size_t i = begin; i < end; ++i) {
+          const std::uint32_t v = changed_union[i];
+          ws.moved[i] =
+              from_local(ws.dq_merged.levels[0].val(v).apply(local.to_local(base.positions[v])));
+          kept += !(ws.moved[i] == base.positions[v]);
         }
-      }
+        ws.chunk_offset[begin / kGrain + 1] = kept;
+      });
+      ws.chunk_offset[0] = 0;
+      for (std::size_t c = 0; c < chunks; ++c) ws.chunk_offset[c + 1] += ws.chunk_offset[c];
+      const std::size_t kept_total = ws.chunk_offset[chunks];
+      merged.positions.indices.resize(kept_total);
+      merged.positions.values.resize(3 * kept_total);
+      ws.pool.for_chunks(n_changed, kGrain, [&](std::size_t begin, std::size_t end) {
+        std::size_t at = ws.chunk_offset[begin / kGrain];
+        for (std::size_t i = begin; i < end; ++i) {
+          const std::uint32_t v = changed_union[i];
+          const Vec3f& p = ws.moved[i];
+          if (!(p == base.positions[v])) {
+            merged.positions.indices[at] = v;
+            float* out = merged.positions.values.data() + 3 * at;
+            out[0] = p.x;
+            out[1] = p.y;
+            out[2] = p.z;
+            ++at;
+          }
+        }
+      });
       timings_.apply_ms += ms_since(t0);
     } else {
       with_translation_ops(t.blend, [&](auto ops) {
@@ -688,6 +1037,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
             out.levels[0],
             users, [&](std::size_t u) -> const auto& { return diffs[order[u]]->positions.indices; },
             epoch, ws.sole);
+        mark_ancestors(links, level_count, out, epoch, ws.union_bits);
         blend_and_reconstruct<Ops>(links, level_count, std::span(ws.vec_users.data(), users), out,
                                    epoch, t.node_blend, ws.pool);
         timings_.blend_ms += ms_since(t0);
@@ -758,6 +1108,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
       ws.pool.run(users, [&](std::size_t u) {
         decompose<Ops>(links, channel_levels, ws.vec_users[u], epoch);
       });
+      mark_ancestors(links, channel_levels, out, epoch, ws.union_bits);
       blend_and_reconstruct<Ops>(links, channel_levels, std::span(ws.vec_users.data(), users), out,
                                  epoch, channel_blend, ws.pool);
       const auto& list = out.levels[0].list;  // increasing

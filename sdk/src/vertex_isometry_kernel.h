@@ -10,6 +10,11 @@
 #include "csculpt/dual_quat.h"
 #include "csculpt/hierarchy.h"
 #include "csculpt/isometry.h"
+#include "dq_simd.h"
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace csculpt::detail {
 
@@ -81,12 +86,88 @@ inline bool face_rotation_kernel(const Vec3f& a0, const Vec3f& a1, const Vec3f& 
   return true;
 }
 
+#if defined(__SSE2__)
+/// face_rotation_kernel for two faces at once, one per lane of SSE2 doubles: every lane
+/// performs exactly the scalar kernel's IEEE operations in the same order (the degenerate
+/// tests become masks), so results are bit-identical to two scalar calls. Vertices are given
+/// as p[face][0..5] = a0, a1, a2, b0, b1, b2.
+inline void face_rotation_kernel_x2(const Vec3f (&p)[2][6], Quat (&out)[2], bool (&ok)[2]) {
+  struct D3 {
+    __m128d x, y, z;
+  };
+  auto load = [&](int i) -> D3 {
+    return {_mm_set_pd(double(p[1][i].x), double(p[0][i].x)),
+            _mm_set_pd(double(p[1][i].y), double(p[0][i].y)),
+            _mm_set_pd(double(p[1][i].z), double(p[0][i].z))};
+  };
+  auto sub = [](const D3& u, const D3& v) -> D3 {
+    return {_mm_sub_pd(u.x, v.x), _mm_sub_pd(u.y, v.y), _mm_sub_pd(u.z, v.z)};
+  };
+  auto mul = [](__m128d a, __m128d b) { return _mm_mul_pd(a, b); };
+  auto add = [](__m128d a, __m128d b) { return _mm_add_pd(a, b); };
+  auto cross = [&](const D3& u, const D3& v) -> D3 {
+    return {_mm_sub_pd(mul(u.y, v.z), mul(u.z, v.y)), _mm_sub_pd(mul(u.z, v.x), mul(u.x, v.z)),
+            _mm_sub_pd(mul(u.x, v.y), mul(u.y, v.x))};
+  };
+  auto dot3 = [&](const D3& u, const D3& v) {
+    return add(add(mul(u.x, v.x), mul(u.y, v.y)), mul(u.z, v.z));
+  };
+  auto scale = [&](const D3& u, __m128d s) -> D3 {
+    return {mul(u.x, s), mul(u.y, s), mul(u.z, s)};
+  };
+  const D3 a0 = load(0), a1 = load(1), a2 = load(2), b0 = load(3), b1 = load(4), b2 = load(5);
+  const D3 e0a = sub(a1, a0), e1a = sub(a2, a0), e0b = sub(b1, b0), e1b = sub(b2, b0);
+  const D3 ca = cross(e0a, e1a), cb = cross(e0b, e1b);
+  const __m128d la2 = dot3(e0a, e0a), lb2 = dot3(e0b, e0b);
+  const __m128d da2 = dot3(ca, ca), db2 = dot3(cb, cb);
+  const __m128d tol = _mm_set1_pd(1e-10);
+  const __m128d valid = _mm_and_pd(_mm_cmpgt_pd(da2, mul(mul(tol, la2), dot3(e1a, e1a))),
+                                   _mm_cmpgt_pd(db2, mul(mul(tol, lb2), dot3(e1b, e1b))));
+  const int mask = _mm_movemask_pd(valid);
+  ok[0] = (mask & 1) != 0;
+  ok[1] = (mask & 2) != 0;
+  if (mask == 0) return;
+  const __m128d one = _mm_set1_pd(1.0);
+  const __m128d inv_la = _mm_div_pd(one, _mm_sqrt_pd(la2)),
+                inv_lb = _mm_div_pd(one, _mm_sqrt_pd(lb2));
+  const __m128d area_a = _mm_sqrt_pd(da2), area_b = _mm_sqrt_pd(db2);
+  const D3 na = scale(ca, _mm_div_pd(one, area_a)), nb = scale(cb, _mm_div_pd(one, area_b));
+  const D3 xa = scale(e0a, inv_la), xb = scale(e0b, inv_lb);
+  const D3 ya = cross(na, xa), yb = cross(nb, xb);
+  const __m128d cs = add(mul(lb2, area_a), mul(la2, area_b));
+  const __m128d sn = _mm_sub_pd(mul(lb2, dot3(e0a, e1a)), mul(la2, dot3(e0b, e1b)));
+  const __m128d inv_h = _mm_div_pd(one, _mm_sqrt_pd(add(mul(cs, cs), mul(sn, sn))));
+  const __m128d c = mul(cs, inv_h), s = mul(sn, inv_h);
+  const D3 xr{add(mul(c, xb.x), mul(s, yb.x)), add(mul(c, xb.y), mul(s, yb.y)),
+              add(mul(c, xb.z), mul(s, yb.z))};
+  const D3 yr{_mm_sub_pd(mul(c, yb.x), mul(s, xb.x)), _mm_sub_pd(mul(c, yb.y), mul(s, xb.y)),
+              _mm_sub_pd(mul(c, yb.z), mul(s, xb.z))};
+  auto entry = [&](__m128d rx, __m128d ry, __m128d rn, const __m128d& ax, const __m128d& ay,
+                   const __m128d& an) { return add(add(mul(rx, ax), mul(ry, ay)), mul(rn, an)); };
+  const __m128d r[9] = {
+      entry(xr.x, yr.x, nb.x, xa.x, ya.x, na.x), entry(xr.x, yr.x, nb.x, xa.y, ya.y, na.y),
+      entry(xr.x, yr.x, nb.x, xa.z, ya.z, na.z), entry(xr.y, yr.y, nb.y, xa.x, ya.x, na.x),
+      entry(xr.y, yr.y, nb.y, xa.y, ya.y, na.y), entry(xr.y, yr.y, nb.y, xa.z, ya.z, na.z),
+      entry(xr.z, yr.z, nb.z, xa.x, ya.x, na.x), entry(xr.z, yr.z, nb.z, xa.y, ya.y, na.y),
+      entry(xr.z, yr.z, nb.z, xa.z, ya.z, na.z)};
+  alignas(16) double lanes[9][2];
+  for (int i = 0; i < 9; ++i) _mm_store_pd(lanes[i], r[i]);
+  for (int f = 0; f < 2; ++f) {
+    if (!ok[f]) continue;
+    const double m[9] = {lanes[0][f], lanes[1][f], lanes[2][f], lanes[3][f], lanes[4][f],
+                         lanes[5][f], lanes[6][f], lanes[7][f], lanes[8][f]};
+    out[f] = quat_from_rotation_matrix(m);
+  }
+}
+#endif
+
 struct VertexIsometryScratch {
   std::vector<std::uint32_t> face_stamp;
   std::vector<std::uint32_t> vertex_stamp;
   std::vector<Quat> rotation_sum;    ///< sum of (q_face - 1) over changed faces
   std::vector<std::uint32_t> faces;  ///< faces around changed vertices, first-touch order
   std::vector<Quat> face_offset;     ///< per listed face: q_face - 1 (zero if degenerate)
+  std::vector<Vec3f> edited;         ///< per touched vertex: its edited position
   std::uint32_t epoch = 0;
 
   void resize(std::size_t vertex_count, std::size_t face_count) {
@@ -94,6 +175,7 @@ struct VertexIsometryScratch {
     if (vertex_stamp.size() < vertex_count) {
       vertex_stamp.resize(vertex_count, 0);
       rotation_sum.resize(vertex_count);
+      edited.resize(vertex_count);
     }
   }
   std::uint32_t next_epoch() {
@@ -125,6 +207,7 @@ void compute_vertex_isometries(const Topology& topology, std::span<const Vec3f> 
     if (scratch.vertex_stamp[v] != epoch) {  // also a changed vertex on no face
       scratch.vertex_stamp[v] = epoch;
       scratch.rotation_sum[v] = {0, 0, 0, 0};
+      scratch.edited[v] = edited(v);
       touched.push_back(v);
     }
     for (std::uint32_t i = vf.offsets[v]; i < vf.offsets[v + 1]; ++i) {
@@ -136,6 +219,7 @@ void compute_vertex_isometries(const Topology& topology, std::span<const Vec3f> 
         if (scratch.vertex_stamp[u] != epoch) {
           scratch.vertex_stamp[u] = epoch;
           scratch.rotation_sum[u] = {0, 0, 0, 0};
+          scratch.edited[u] = edited(u);
           touched.push_back(u);
         }
       }
@@ -143,15 +227,56 @@ void compute_vertex_isometries(const Topology& topology, std::span<const Vec3f> 
   }
   // 2. their rotations: independent, so the divisions and roots of successive faces overlap
   scratch.face_offset.resize(scratch.faces.size());
-  for (std::size_t k = 0; k < scratch.faces.size(); ++k) {
+  std::size_t first_scalar = 0;
+#if defined(__SSE2__)
+  for (; first_scalar + 2 <= scratch.faces.size(); first_scalar += 2) {
+    Vec3f p[2][6];
+    for (int f = 0; f < 2; ++f) {
+      const Triangle& t = topology.triangles[scratch.faces[first_scalar + f]];
+      for (int i = 0; i < 3; ++i) {
+        p[f][i] = base[t[i]];
+        p[f][3 + i] = scratch.edited[t[i]];
+      }
+    }
+    Quat q[2];
+    bool ok[2];
+    face_rotation_kernel_x2(p, q, ok);
+    for (int f = 0; f < 2; ++f)
+      scratch.face_offset[first_scalar + f] =
+          ok[f] ? Quat{q[f].w - 1.f, q[f].x, q[f].y, q[f].z} : Quat{0, 0, 0, 0};
+  }
+#endif
+  for (std::size_t k = first_scalar; k < scratch.faces.size(); ++k) {
     const Triangle& t = topology.triangles[scratch.faces[k]];
     Quat q;
-    scratch.face_offset[k] = face_rotation_kernel(base[t[0]], base[t[1]], base[t[2]], edited(t[0]),
-                                                  edited(t[1]), edited(t[2]), q)
-                                 ? Quat{q.w - 1.f, q.x, q.y, q.z}
-                                 : Quat{0, 0, 0, 0};
+    scratch.face_offset[k] =
+        face_rotation_kernel(base[t[0]], base[t[1]], base[t[2]], scratch.edited[t[0]],
+                             scratch.edited[t[1]], scratch.edited[t[2]], q)
+            ? Quat{q.w - 1.f, q.x, q.y, q.z}
+            : Quat{0, 0, 0, 0};
   }
   // 3. summed at their vertices
+#if defined(__SSE2__)
+  // The same operations on registers, lane by lane in the same order (dq_simd.h).
+  for (std::size_t k = 0; k < scratch.faces.size(); ++k) {
+    const __m128 o = _mm_loadu_ps(&scratch.face_offset[k].w);
+    for (std::uint32_t u : topology.triangles[scratch.faces[k]])
+      _mm_storeu_ps(&scratch.rotation_sum[u].w,
+                    _mm_add_ps(_mm_loadu_ps(&scratch.rotation_sum[u].w), o));
+  }
+  for (std::uint32_t u : touched) {
+    const float degree = static_cast<float>(vf.offsets[u + 1] - vf.offsets[u]);
+    __m128 r = _mm_add_ss(_mm_loadu_ps(&scratch.rotation_sum[u].w), _mm_set_ss(degree));
+    const float n2 = hsum_ordered(_mm_mul_ps(r, r));
+    r = n2 > 1e-30f ? _mm_mul_ps(_mm_set1_ps(1.f / std::sqrt(n2)), r) : _mm_set_ss(1.f);
+    // from_rotation_and_points: (r, pb r - r pa) with p = quat(0, 0.5 point)
+    const Vec3f from = frame.to_local(base[u]), to = frame.to_local(scratch.edited[u]);
+    const __m128 half = _mm_set1_ps(0.5f);
+    const __m128 pa = _mm_mul_ps(half, _mm_set_ps(from.z, from.y, from.x, 0.f));
+    const __m128 pb = _mm_mul_ps(half, _mm_set_ps(to.z, to.y, to.x, 0.f));
+    store(u, dq_value(dq_canonical({r, _mm_sub_ps(q_mul(pb, r), q_mul(r, pa))})));
+  }
+#else
   for (std::size_t k = 0; k < scratch.faces.size(); ++k)
     for (std::uint32_t u : topology.triangles[scratch.faces[k]])
       scratch.rotation_sum[u] = scratch.rotation_sum[u] + scratch.face_offset[k];
@@ -162,8 +287,9 @@ void compute_vertex_isometries(const Topology& topology, std::span<const Vec3f> 
     const float n2 = dot(r, r);
     r = n2 > 1e-30f ? (1.f / std::sqrt(n2)) * r : Quat{};
     store(u, canonical(DualQuat::from_rotation_and_points(r, frame.to_local(base[u]),
-                                                          frame.to_local(edited(u)))));
+                                                          frame.to_local(scratch.edited[u]))));
   }
+#endif
 }
 
 }  // namespace csculpt::detail
