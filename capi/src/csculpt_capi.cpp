@@ -827,7 +827,6 @@ std::unique_ptr<csc_session> new_session(std::unique_ptr<csculpt::peer::Session>
   h->local = s->base();
   h->invite = s->invite();
   h->session = std::move(s);
-  // the base's bounding box fixes the wire tolerance's scale once for the session
   return h;
 }
 

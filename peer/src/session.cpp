@@ -32,6 +32,14 @@ constexpr const char* kZapEndpoint = "inproc://zeromq.zap.01";
 
 // ---- small helpers -----------------------------------------------------------------------
 
+/// The session's wire options: the position tolerance is relative to the session's fixed
+/// frame (the first mesh's bounding-box diagonal), not recomputed from each version's mesh.
+EncodeOptions wire_options_for(const EncodeOptions& wire, const MergeFrame& frame) {
+  EncodeOptions o = wire;
+  if (o.position_scale == 0) o.position_scale = frame.scale;
+  return o;
+}
+
 std::uint64_t mix64(std::uint64_t h, std::uint64_t v) {
   h ^= v + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
   h *= 0xff51afd7ed558ccdull;
@@ -1153,7 +1161,8 @@ class Node {
     header.base_version = version_;
     header.sequence = version_ + 1;
     header.author = "merge";
-    std::vector<std::uint8_t> diff_bytes = encode_diff(merged, base_, header, options_.wire);
+    std::vector<std::uint8_t> diff_bytes =
+        encode_diff(merged, base_, header, wire_options_for(options_.wire, frame_));
     const float merge_ms = std::chrono::duration<float, std::milli>(Clock::now() - t0).count();
 
     VersionRecord r;
@@ -1407,7 +1416,9 @@ bool Session::submit(Mesh& local, std::uint32_t strokes) {
   header.base_version = s.version;
   header.sequence = s.next_sequence++;
   header.author = s.options.name;
-  std::vector<std::uint8_t> bytes = encode_diff(d, s.base, header, s.options.wire);
+  s.ensure_merge_state();
+  std::vector<std::uint8_t> bytes =
+      encode_diff(d, s.base, header, wire_options_for(s.options.wire, s.frame));
   Diff sent = decode_diff(bytes, s.base);
   // The host's values become what the peers receive: changed vertices the quantisation left
   // out go back to the base, the others to their decoded values.

@@ -37,8 +37,9 @@ struct SessionOptions {
   /// The merger merges this often (50 ms to minutes; the paper used 5 s and 20 s).
   Millis sync{250};
   MembershipOptions membership;
-  /// Wire tolerances of submitted and merged diffs (see wire.h). A change of a vertex smaller
-  /// than the position tolerance within one submit is not sent.
+  /// Wire tolerances of submitted and merged diffs (see wire.h); with position_scale 0 the
+  /// position tolerance is relative to the session's frame (the first mesh's bounding-box
+  /// diagonal). A change of a vertex smaller than the tolerance within one submit is not sent.
   EncodeOptions wire;
   /// Largest message a socket accepts (ZMQ_MAXMSGSIZE); snapshots go in chunks below it.
   std::size_t max_message_bytes = std::size_t{64} << 20;
