@@ -493,7 +493,8 @@ CSC_API csc_status csc_session_submit(csc_session* session, const csc_vertex_arr
                                       uint32_t strokes, int32_t* sent);
 
 /** Applies the merged versions received so far and rebases `local` onto them (written in
- *  place). `*applied` (may be NULL) is the number of versions applied. */
+ *  place). A submitted edit that a version did not include (it reached the merger after the
+ *  merge) is sent again at once. `*applied` (may be NULL) is the number of versions applied. */
 CSC_API csc_status csc_session_update(csc_session* session, const csc_vertex_arrays* local,
                                       uint32_t* applied);
 

@@ -1440,6 +1440,10 @@ std::size_t Session::update(Mesh& local) {
   Impl& s = *impl_;
   std::vector<HostItem> items = s.node->take_items();
   std::size_t applied = 0;
+  // A submit that a version did not include (it reached the merger after the merge, based on
+  // the older version) is sent again, rebased, once the versions are applied: the host does
+  // not have to notice.
+  bool resend = false;
   for (HostItem& item : items) {
     if (item.snapshot) {
       const Mesh& snap = item.snap->mesh;
@@ -1459,6 +1463,7 @@ std::size_t Session::update(Mesh& local) {
       s.base = snap;
       s.has_base = true;
       s.version = item.version;
+      resend |= !s.submitted.empty();
       s.submitted.clear();
       s.last_submit_digest = 0;
       s.ensure_merge_state();
@@ -1469,10 +1474,12 @@ std::size_t Session::update(Mesh& local) {
     s.ensure_merge_state();
     // S: the state this peer's merged submit described (the base if none of ours is in).
     const Diff* ours = nullptr;
+    std::uint64_t merged_sequence = 0;
     for (const auto& [peer, seq] : item.merged_by)
       if (peer == s.node->id())
         if (auto it = s.submitted.find(seq); it != s.submitted.end()) {
           ours = &it->second;
+          merged_sequence = seq;
           if (auto st = s.strokes_at.find(seq); st != s.strokes_at.end())
             s.unacknowledged_strokes -= std::min(s.unacknowledged_strokes, st->second);
         }
@@ -1501,12 +1508,14 @@ std::size_t Session::update(Mesh& local) {
       ++s.rebases;
     }
     s.version = item.version;
+    resend |= !s.submitted.empty() && s.submitted.rbegin()->first != merged_sequence;
     s.submitted.clear();
     s.strokes_at.clear();
     s.last_submit_digest = 0;
     ++applied;
   }
   s.versions_applied += applied;
+  if (resend && !local.positions.empty()) submit(local, 0);
   return applied;
 }
 

@@ -103,7 +103,22 @@ TEST(CapiSession, TwoHostsEditTheirArraysAndConverge) {
   bool joined_event = false, version_event = false;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
   for (;;) {
-    ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "no convergence";
+    if (std::chrono::steady_clock::now() >= deadline) {
+      csc_session_stats sa = CSC_SESSION_STATS_INIT, sb = CSC_SESSION_STATS_INIT;
+      csc_session_get_stats(a, &sa);
+      csc_session_get_stats(b, &sb);
+      ADD_FAILURE() << "no convergence: a v" << csc_session_version(a) << "/" << sa.version
+                    << " ack " << sa.strokes_acknowledged << " epoch " << sa.epoch << " merger "
+                    << sa.merger << " members " << sa.members << " merges " << sa.merges
+                    << " dropped " << sa.messages_dropped << " stale " << sa.stale_ignored
+                    << "; b v" << csc_session_version(b) << "/" << sb.version << " ack "
+                    << sb.strokes_acknowledged << " epoch " << sb.epoch << " merger " << sb.merger
+                    << " members " << sb.members << " merges " << sb.merges << " dropped "
+                    << sb.messages_dropped << " stale " << sb.stale_ignored << " submits "
+                    << sb.submits << "; positions equal " << (ha.positions == hb.positions)
+                    << " channels equal " << (ha.channels == hb.channels);
+      break;
+    }
     std::uint32_t applied = 0;
     ASSERT_EQ(csc_session_update(a, &ha.arrays, &applied), CSC_OK) << csc_last_error();
     ASSERT_EQ(csc_session_update(b, &hb.arrays, &applied), CSC_OK) << csc_last_error();

@@ -141,7 +141,8 @@ class Session {
   bool submit(Mesh& local, std::uint32_t strokes = 0);
   /// Applies every merged version received so far to base() and rebases `local` onto it:
   /// local edits not yet inside a merged version are kept, edits already merged are not
-  /// applied twice. Returns the number of versions applied.
+  /// applied twice. A submitted edit that a version did not include (it reached the merger
+  /// after the merge) is sent again, rebased, at once. Returns the number of versions applied.
   std::size_t update(Mesh& local);
   /// Events since the last call (at most 10,000 are kept).
   std::vector<Event> poll_events();
