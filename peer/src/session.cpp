@@ -11,6 +11,7 @@
 #include <deque>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <random>
 #include <thread>
 #include <zmq.hpp>
@@ -755,12 +756,9 @@ class Node {
       std::lock_guard lock(mutex_);
       ++stats_.fetches;
     }
-    // Same version as the merger but another history: we hold a lost merger's version.
-    if (hb.version() == version_ && hb.chain() != chain_ && election_.merger() == sender &&
-        now >= next_fetch_) {
-      next_fetch_ = now + options_.membership.heartbeat;
-      request_snapshot(sender);
-    }
+    // Another history than the merger's at a version we hold: we hold a lost merger's version.
+    if (election_.merger() == sender && hb.version() <= version_)
+      check_divergence(sender, hb.version(), hb.chain(), now);
   }
 
   void on_leave(PeerId peer) {
@@ -845,7 +843,11 @@ class Node {
         return;
       }
     }
-    if (v.version() <= version_) return;  // already have it
+    if (v.version() <= version_) {  // already have it, unless our history differs
+      if (election_.merger() == env.sender())
+        check_divergence(env.sender(), v.version(), v.chain(), Clock::now());
+      return;
+    }
     if (v.version() > version_ + 1) {
       if (buffered_.size() < kHistory) buffered_[v.version()] = record_of(v);
       send_to_peer(env.sender(), envelope(fb::Body::Fetch, [&](auto& b) {
@@ -916,6 +918,9 @@ class Node {
     apply_diff(merged, base_);
     version_ = r.version;
     chain_ = r.chain;
+    // Submits held for the old version (a merger catching up by fetch) no longer apply: their
+    // authors rebase and send again when they see this version.
+    pending_.clear();
     apply_contributions(r);
     if (own_submit_.kind == Command::Kind::submit && own_submit_.base_version < version_)
       own_submit_.bytes.clear();  // stale: the host rebases and submits again
@@ -995,8 +1000,28 @@ class Node {
 
   // ---- snapshots (Clone pattern) ------------------------------------------------------------
   void request_snapshot(PeerId from) {
+    snapshot_requested_ = true;
     send_to_peer(from, envelope(fb::Body::SnapshotRequest,
                                 [](auto& b) { return fb::CreateSnapshotRequest(b).Union(); }));
+  }
+
+  /// Our chain at `version`, if we still hold it.
+  std::optional<std::uint64_t> chain_at(std::uint64_t version) const {
+    if (version == version_) return chain_;
+    for (const VersionRecord& r : history_)
+      if (r.version == version) return r.chain;
+    return std::nullopt;
+  }
+
+  /// The merger's history says `chain` at `version`, which we also hold: if ours differs, we
+  /// applied a lost merger's versions (two mergers for a moment, after a false expiry or a
+  /// partition) and take the merger's state instead. Rate-limited.
+  void check_divergence(PeerId merger, std::uint64_t version, std::uint64_t chain,
+                        Clock::time_point now) {
+    const std::optional<std::uint64_t> ours = chain_at(version);
+    if (!ours || *ours == chain || now < next_divergence_check_) return;
+    next_divergence_check_ = now + 4 * options_.membership.heartbeat;
+    request_snapshot(merger);
   }
 
   void send_snapshot(PeerId peer) {
@@ -1023,7 +1048,8 @@ class Node {
     if (!c.data()) return dropped("snapshot chunk without data");
     if (c.total() > options_.max_snapshot_bytes)
       return dropped("snapshot of " + std::to_string(c.total()) + " bytes exceeds the limit");
-    if (joined_ && c.version() < version_) return;
+    // A snapshot older than our version is only wanted when we asked for it (divergence).
+    if (joined_ && c.version() < version_ && !snapshot_requested_) return;
     if (c.version() != snap_version_ || c.total() != snap_buffer_.size()) {
       snap_version_ = c.version();
       snap_chain_ = c.chain();
@@ -1043,6 +1069,9 @@ class Node {
     base_ = snap->mesh;
     version_ = snap_version_;
     chain_ = snap_chain_;
+    snapshot_requested_ = false;
+    history_.clear();  // another branch's versions: not ours to serve any more
+    pending_.clear();
     {
       std::lock_guard lock(mutex_);
       frame_ = snap->frame;
@@ -1240,6 +1269,8 @@ class Node {
   std::map<PeerId, std::pair<std::uint64_t, std::uint64_t>> reported_;  // version, chain
   Clock::time_point next_fetch_{};
   Clock::time_point next_join_hello_{};
+  Clock::time_point next_divergence_check_{};
+  bool snapshot_requested_ = false;
   std::map<PeerId, PendingSubmit> pending_;
   Command own_submit_;  // the last submit, until a merged version covers it
   std::uint64_t snap_version_ = ~std::uint64_t{0}, snap_chain_ = 0;
