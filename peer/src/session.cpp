@@ -481,8 +481,6 @@ class Node {
     return dealers_.emplace(endpoint, std::move(s)).first->second;
   }
 
-  void disconnect(const std::string& endpoint) { dealers_.erase(endpoint); }
-
   /// 'P' and the id's 8 bytes (a routing id may not start with a zero byte).
   static std::array<std::uint8_t, 9> routing_id(PeerId id) {
     std::array<std::uint8_t, 9> r{'P'};
@@ -764,9 +762,7 @@ class Node {
   void on_leave(PeerId peer) {
     const auto& m = membership_.members();
     if (auto it = m.find(peer); it != m.end()) {
-      const std::string endpoint = it->second.endpoint;
-      membership_.remove(peer);
-      disconnect(endpoint);
+      membership_.remove(peer);  // its socket closes later, with those of expired peers
       pending_.erase(peer);
       reported_.erase(peer);
       push_event({EventKind::peer_left, peer, version_, election_.epoch(), "left"});
@@ -1124,11 +1120,26 @@ class Node {
       reported_.erase(p);
       push_event({EventKind::peer_left, p, version_, election_.epoch(), "expired"});
     }
-    // Close sockets of peers no longer members.
+    // Close sockets of peers no longer members, but only some time after they went: a peer
+    // taken for dead that was only stalled comes back over the connection it still has. A new
+    // socket would reuse our routing id while the old connection is still open on its side,
+    // which its ROUTER refuses, and both sides would stay deaf to each other.
+    const auto linger = 2 * options_.membership.expired;
     for (auto it = dealers_.begin(); it != dealers_.end();) {
-      bool member = it->first == joining_endpoint_;
-      for (const auto& [id, m] : membership_.members()) member |= m.endpoint == it->first;
-      it = member ? std::next(it) : dealers_.erase(it);
+      bool keep = it->first == joining_endpoint_;
+      for (const auto& [id, m] : membership_.members()) keep |= m.endpoint == it->first;
+      if (keep) {
+        departed_.erase(it->first);
+        ++it;
+        continue;
+      }
+      const auto [since, inserted] = departed_.try_emplace(it->first, now);
+      if (now - since->second < linger) {
+        ++it;
+        continue;
+      }
+      departed_.erase(since);
+      it = dealers_.erase(it);
     }
     elect();
     for (const Member* m : membership_.others()) send_heartbeat_to(m->endpoint);
@@ -1255,6 +1266,7 @@ class Node {
   zmq::context_t ctx_{1};
   zmq::socket_t zap_, router_;
   std::map<std::string, zmq::socket_t> dealers_;
+  std::map<std::string, Clock::time_point> departed_;  // endpoint -> when its peer went
   std::array<std::uint8_t, 32> server_public_{}, client_public_{};
   std::string endpoint_, joining_endpoint_;
   Membership membership_;
