@@ -150,6 +150,24 @@ inline void face_rotation_kernel_x2(const Vec3f (&p)[2][6], Quat (&out)[2], bool
       entry(xr.y, yr.y, nb.y, xa.y, ya.y, na.y), entry(xr.y, yr.y, nb.y, xa.z, ya.z, na.z),
       entry(xr.z, yr.z, nb.z, xa.x, ya.x, na.x), entry(xr.z, yr.z, nb.z, xa.y, ya.y, na.y),
       entry(xr.z, yr.z, nb.z, xa.z, ya.z, na.z)};
+  // quat_from_rotation_matrix on both lanes when both take its first branch (trace > 0,
+  // the common case: face rotations are mostly small): the same operations, so the same bits.
+  // There w = s / 4 > 0, so its sign flip multiplies by 1.0 (exact) and is left out; the
+  // narrowing to float rounds as the scalar cast does.
+  const __m128d tr = add(add(r[0], r[4]), r[8]);
+  if (mask == 3 && _mm_movemask_pd(_mm_cmpgt_pd(tr, _mm_setzero_pd())) == 3) {
+    const __m128d sq = mul(_mm_sqrt_pd(add(tr, one)), _mm_set1_pd(2.0));
+    const __m128d inv = _mm_div_pd(one, sq);
+    const __m128 w = _mm_cvtpd_ps(mul(_mm_set1_pd(0.25), sq));
+    const __m128 x = _mm_cvtpd_ps(mul(_mm_sub_pd(r[7], r[5]), inv));
+    const __m128 y = _mm_cvtpd_ps(mul(_mm_sub_pd(r[2], r[6]), inv));
+    const __m128 z = _mm_cvtpd_ps(mul(_mm_sub_pd(r[3], r[1]), inv));
+    // (w0 w1 . .), (x0 x1 . .) ... -> (w0 x0 w1 x1), (y0 z0 y1 z1) -> per face (w x y z)
+    const __m128 wx = _mm_unpacklo_ps(w, x), yz = _mm_unpacklo_ps(y, z);
+    _mm_storeu_ps(&out[0].w, _mm_movelh_ps(wx, yz));
+    _mm_storeu_ps(&out[1].w, _mm_movehl_ps(yz, wx));
+    return;
+  }
   alignas(16) double lanes[9][2];
   for (int i = 0; i < 9; ++i) _mm_store_pd(lanes[i], r[i]);
   for (int f = 0; f < 2; ++f) {
