@@ -86,6 +86,55 @@ inline bool face_rotation_kernel(const Vec3f& a0, const Vec3f& a1, const Vec3f& 
   return true;
 }
 
+/// One lane of face_rotation_kernel_f4 (the scalar reference it equals bit for bit, and the
+/// path of builds without SSE2, so that every build merges alike): single-precision face
+/// rotation of a well-conditioned face, false where it declines (see face_rotation_kernel_f4).
+inline bool face_rotation_kernel_f1(const Vec3f& a0, const Vec3f& a1, const Vec3f& a2,
+                                    const Vec3f& b0, const Vec3f& b1, const Vec3f& b2, Quat& out) {
+  struct F3 {
+    float x, y, z;
+  };
+  auto sub = [](const Vec3f& p, const Vec3f& q) -> F3 { return {p.x - q.x, p.y - q.y, p.z - q.z}; };
+  auto cross = [](const F3& u, const F3& v) -> F3 {
+    return {u.y * v.z - u.z * v.y, u.z * v.x - u.x * v.z, u.x * v.y - u.y * v.x};
+  };
+  auto dot3 = [](const F3& u, const F3& v) { return u.x * v.x + u.y * v.y + u.z * v.z; };
+  auto scale = [](const F3& u, float s) -> F3 { return {u.x * s, u.y * s, u.z * s}; };
+  const F3 e0a = sub(a1, a0), e1a = sub(a2, a0), e0b = sub(b1, b0), e1b = sub(b2, b0);
+  const F3 ca = cross(e0a, e1a), cb = cross(e0b, e1b);
+  const float la2 = dot3(e0a, e0a), lb2 = dot3(e0b, e0b);
+  const float da2 = dot3(ca, ca), db2 = dot3(cb, cb);
+  const float tol = 1e-2f, lo = 1e-24f, hi = 1e24f;
+  if (!(da2 > tol * la2 * dot3(e1a, e1a)) || !(db2 > tol * lb2 * dot3(e1b, e1b))) return false;
+  if (!(da2 > lo && da2 < hi && db2 > lo && db2 < hi)) return false;
+  const float inv_la = 1.f / std::sqrt(la2), inv_lb = 1.f / std::sqrt(lb2);
+  const float area_a = std::sqrt(da2), area_b = std::sqrt(db2);
+  const F3 na = scale(ca, 1.f / area_a), nb = scale(cb, 1.f / area_b);
+  const F3 xa = scale(e0a, inv_la), xb = scale(e0b, inv_lb);
+  const F3 ya = cross(na, xa), yb = cross(nb, xb);
+  const float inv_la2 = inv_la * inv_la, inv_lb2 = inv_lb * inv_lb;
+  const float cs = area_a * inv_la2 + area_b * inv_lb2;
+  const float sn = dot3(e0a, e1a) * inv_la2 - dot3(e0b, e1b) * inv_lb2;
+  const float inv_h = 1.f / std::sqrt(cs * cs + sn * sn);
+  const float c = cs * inv_h, s = sn * inv_h;
+  const F3 xr{c * xb.x + s * yb.x, c * xb.y + s * yb.y, c * xb.z + s * yb.z};
+  const F3 yr{c * yb.x - s * xb.x, c * yb.y - s * xb.y, c * yb.z - s * xb.z};
+  const float m0 = xr.x * xa.x + yr.x * ya.x + nb.x * na.x;
+  const float m1 = xr.x * xa.y + yr.x * ya.y + nb.x * na.y;
+  const float m2 = xr.x * xa.z + yr.x * ya.z + nb.x * na.z;
+  const float m3 = xr.y * xa.x + yr.y * ya.x + nb.y * na.x;
+  const float m5 = xr.y * xa.z + yr.y * ya.z + nb.y * na.z;
+  const float m4 = xr.y * xa.y + yr.y * ya.y + nb.y * na.y;
+  const float m6 = xr.z * xa.x + yr.z * ya.x + nb.z * na.x;
+  const float m7 = xr.z * xa.y + yr.z * ya.y + nb.z * na.y;
+  const float m8 = xr.z * xa.z + yr.z * ya.z + nb.z * na.z;
+  const float tr = m0 + m4 + m8;
+  if (!(tr > 0)) return false;
+  const float sq = std::sqrt(tr + 1.f) * 2.f, inv = 1.f / sq;
+  out = {0.25f * sq, (m7 - m5) * inv, (m2 - m6) * inv, (m3 - m1) * inv};
+  return true;
+}
+
 #if defined(__SSE2__)
 /// face_rotation_kernel for two faces at once, one per lane of SSE2 doubles: every lane
 /// performs exactly the scalar kernel's IEEE operations in the same order (the degenerate
@@ -184,7 +233,8 @@ inline void face_rotation_kernel_x2(const Vec3f (&p)[2][6], Quat (&out)[2], bool
 /// (Shepperd's first branch, stable when w >= 1/2). `ok` is set for the lanes computed here;
 /// every other lane (thin, degenerate, large rotation, huge or tiny coordinates) is left to
 /// the double kernel. The same formulas as face_rotation_kernel, in float: deterministic
-/// (IEEE single operations in a fixed order on every SSE2 CPU), not bit-identical to it.
+/// (IEEE single operations in a fixed order on every SSE2 CPU), not bit-identical to it;
+/// each lane is bit-identical to face_rotation_kernel_f1.
 inline void face_rotation_kernel_f4(const Vec3f (&p)[4][6], Quat (&out)[4], bool (&ok)[4]) {
   struct F3 {
     __m128 x, y, z;
@@ -382,7 +432,15 @@ void compute_vertex_isometries(const Topology& topology, std::span<const Vec3f> 
           ok[f] ? Quat{q[f].w - 1.f, q[f].x, q[f].y, q[f].z} : Quat{0, 0, 0, 0};
   }
 #else
-  for (std::size_t k = 0; k < scratch.faces.size(); ++k) redo.push_back(static_cast<std::uint32_t>(k));
+  for (std::size_t k = 0; k < scratch.faces.size(); ++k) {
+    const Triangle& t = topology.triangles[scratch.faces[k]];
+    Quat q;
+    if (face_rotation_kernel_f1(base[t[0]], base[t[1]], base[t[2]], scratch.edited[t[0]],
+                                scratch.edited[t[1]], scratch.edited[t[2]], q))
+      scratch.face_offset[k] = Quat{q.w - 1.f, q.x, q.y, q.z};
+    else
+      redo.push_back(static_cast<std::uint32_t>(k));
+  }
 #endif
   for (std::size_t r = first_scalar; r < redo.size(); ++r) {
     const std::uint32_t k = redo[r];

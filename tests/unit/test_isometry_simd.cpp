@@ -111,6 +111,13 @@ TEST(IsometryFaceRotationSimd, SinglePrecisionMatchesTheDoubleKernelWhereItAnswe
     bool ok[4];
     detail::face_rotation_kernel_f4(p, q, ok);
     for (int f = 0; f < 4; ++f) {
+      Quat q1;  // the scalar form: the same answer bit for bit, the same lanes declined
+      const bool ok1 =
+          detail::face_rotation_kernel_f1(p[f][0], p[f][1], p[f][2], p[f][3], p[f][4], p[f][5], q1);
+      ASSERT_EQ(ok1, ok[f]) << "trial " << trial << " face " << f;
+      if (ok1) {
+        ASSERT_TRUE(same_bits(q1, q[f])) << "trial " << trial << " face " << f;
+      }
       if (!ok[f]) {
         ++declined;
         continue;
