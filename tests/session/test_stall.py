@@ -12,7 +12,7 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from sessionlib import Peer, report, wait_all  # noqa: E402
+from sessionlib import Peer, converged, report, wait_all  # noqa: E402
 
 # Longer than --expired-ms 500 (sessionlib.FAST) with room for the survivors to elect and merge.
 STALL_S = 1.5
@@ -23,16 +23,9 @@ REPORTED = ("merger_changed", "peer_left", "peer_joined", "peer_evasive", "dropp
 
 def same_history(peers):
     """Done editing, same version and mesh digest, the mesh being the agreed version's. Unlike
-    sessionlib.converged, unacknowledged strokes are not required to be 0: lost edits are
-    checked (and reported) separately from convergence."""
-    states = [p.state() for p in peers]
-    if any(s is None for s in states):
-        return False
-    v, d = states[0]["version"], states[0]["digest"]
-    for s in states:
-        if s["editing"] or s["version"] != v or s["digest"] != d or s["base_digest"] != d:
-            return False
-    return {"version": v, "digest": d}
+    sessionlib.converged's default, unacknowledged strokes are not required to be 0: lost
+    edits are checked (and reported) separately from convergence."""
+    return converged(peers, require_acknowledged=False)
 
 
 def replaced_branch(peer, fork_version):
