@@ -1,7 +1,5 @@
 #include "artist.h"
 
-#include "csculpt/diff.h"
-
 namespace csculpt::cli {
 
 SimulatedArtist::SimulatedArtist(peer::Session& session, const ArtistOptions& options)
@@ -12,17 +10,17 @@ SimulatedArtist::SimulatedArtist(peer::Session& session, const ArtistOptions& op
           Topology::build(static_cast<std::uint32_t>(local_.vertex_count()), local_.triangles)),
       script_(scripted_strokes(session.base(), options.seed, 4096, options.paint)) {}
 
-std::size_t SimulatedArtist::stroke() {
-  const Mesh before_channels_only = local_;  // paint adds channels the base may lack: refused
+bool SimulatedArtist::stroke() {
   const Stroke& s = script_[cursor_++ % script_.size()];
+  // Paint adds the material channels a mesh lacks, which the session's mesh would refuse:
+  // such a stroke is skipped rather than applied and undone.
+  if (s.kind == Stroke::Kind::paint)
+    for (const ChannelDesc& d : material_channels())
+      if (local_.find_channel(d.name) < 0) return false;
   apply_stroke(local_, s, &topology_);
-  if (local_.channels.size() != session_.base().channels.size()) {
-    local_ = before_channels_only;  // the session's mesh has no material channels to paint
-    return 0;
-  }
   ++strokes_;
   ++unsent_strokes_;
-  return capture_diff(before_channels_only, local_).touched_vertices();
+  return true;
 }
 
 std::size_t SimulatedArtist::step(peer::Clock::time_point now, bool editing) {

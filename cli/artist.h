@@ -32,8 +32,9 @@ class SimulatedArtist {
   /// the number of versions applied.
   std::size_t step(peer::Clock::time_point now, bool editing);
 
-  /// Applies the next scripted stroke now (counted); returns the vertices it changed.
-  std::size_t stroke();
+  /// Applies the next scripted stroke now (counted); false when it was skipped (paint on a
+  /// mesh without the material channels).
+  bool stroke();
 
   Mesh& local() { return local_; }
   std::uint32_t strokes() const { return strokes_; }
