@@ -2,8 +2,8 @@
 // magnitude-weighted blend per node -> recomposition coarse to fine.
 //
 // Everything is sparse: a diff touches a few percent of the vertices, so each level keeps
-// a list of the nodes that differ from the identity plus a stamp per node (no clearing
-// between merges), and the merged result is computed only for the ancestors of vertices
+// a list of the nodes that differ from the identity plus a bitmap over its nodes (cleared
+// word by word from the list at the next pass), and the merged result is computed only for the ancestors of vertices
 // some diff changed. Untouched vertices keep their exact base values (paper's identity).
 #include "csculpt/merge.h"
 
@@ -12,6 +12,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <numeric>
 #include <string>
@@ -23,6 +25,7 @@
 #include "dq_simd.h"
 #include "dq_soa.h"
 #include "vertex_isometry_kernel.h"
+#include "aligned_allocator.h"
 #include "worker_pool.h"
 
 namespace csculpt {
@@ -216,41 +219,59 @@ struct VecOps {
 
 template <class Value>
 struct SparseLevel {
-  /// Value and stamp side by side: a lookup costs one cache line, not two.
-  struct Slot {
-    Value value;
-    std::uint32_t stamp = 0;
-  };
-  std::vector<Slot> slots;
-  std::vector<std::uint32_t> list;  ///< nodes stamped this epoch, in first-touch order
+  /// Values of the listed nodes (others undefined), 32-byte aligned: a dual quaternion is
+  /// half a cache line and never straddles two.
+  std::vector<Value, detail::AlignedAllocator<Value, 64>> values;
+  /// One bit per node, set exactly for the listed ones: "does this node differ from the
+  /// identity" is a bit test in a small array (a level-0 bitmap of 1M vertices is 128 KB),
+  /// and the values of absent nodes are never loaded.
+  std::vector<std::uint64_t> bits;
+  std::vector<std::uint32_t> list;  ///< the marked nodes, in first-touch order
 
-  void reserve_nodes(std::size_t n) {
-    if (slots.size() < n) slots.resize(n);
+  /// Starts a pass over a level of n nodes: forgets the previous pass's marks (clearing
+  /// only the bitmap words its list touched).
+  void begin(std::size_t n) {
+    for (std::uint32_t v : list) bits[v >> 6] = 0;
+    list.clear();
+    if (values.size() < n) values.resize(n);
+    if (bits.size() < (n + 63) / 64) bits.resize((n + 63) / 64, 0);
   }
-  bool has(std::uint32_t node, std::uint32_t epoch) const { return slots[node].stamp == epoch; }
-  Value& val(std::uint32_t node) { return slots[node].value; }
-  const Value& val(std::uint32_t node) const { return slots[node].value; }
-  /// Marks the node; returns true if it was new this epoch.
-  bool mark(std::uint32_t node, std::uint32_t epoch) {
-    if (slots[node].stamp == epoch) return false;
-    slots[node].stamp = epoch;
+  bool has(std::uint32_t node) const { return (bits[node >> 6] >> (node & 63) & 1) != 0; }
+  Value& val(std::uint32_t node) { return values[node]; }
+  const Value& val(std::uint32_t node) const { return values[node]; }
+  /// Marks the node; returns true if it was new this pass.
+  bool mark(std::uint32_t node) {
+    std::uint64_t& word = bits[node >> 6];
+    const std::uint64_t bit = std::uint64_t{1} << (node & 63);
+    if ((word & bit) != 0) return false;
+    word |= bit;
     list.push_back(node);
     return true;
   }
-  void forget() {
-    for (Slot& s : slots) s.stamp = 0;
-  }
+  /// Sets the node's bit only; the caller lists the node itself.
+  void set(std::uint32_t node) { bits[node >> 6] |= std::uint64_t{1} << (node & 63); }
 };
+
+/// A level read-only, as the per-node loops see it.
+template <class Value>
+struct LevelView {
+  const Value* values = nullptr;
+  const std::uint64_t* bits = nullptr;
+  bool has(std::uint32_t node) const { return (bits[node >> 6] >> (node & 63) & 1) != 0; }
+  static LevelView of(const SparseLevel<Value>& l) { return {l.values.data(), l.bits.data()}; }
+};
+
+/// The sparse loops below know their next nodes well before they read them.
+inline void prefetch(const void* at) {
+  __builtin_prefetch(at);
+}
 
 template <class Value>
 struct SparsePyramid {
   std::vector<SparseLevel<Value>> levels;
-  void reserve(const Hierarchy& h, std::size_t level_count) {
+  void begin(const Hierarchy& h, std::size_t level_count) {
     if (levels.size() < level_count) levels.resize(level_count);
-    for (std::size_t i = 0; i < level_count; ++i) {
-      levels[i].reserve_nodes(h.levels()[i].node_count);
-      levels[i].list.clear();
-    }
+    for (std::size_t i = 0; i < level_count; ++i) levels[i].begin(h.levels()[i].node_count);
   }
 };
 
@@ -267,7 +288,7 @@ constexpr std::uint32_t kNoOwner = 0xffffffffu;
 /// appended node whether a single list holds it.
 template <class Value, class ListOf>
 void mark_sorted_union(SparseLevel<Value>& level, std::size_t lists, ListOf&& list_of,
-                       std::uint32_t epoch, std::vector<SoleChange>& sole) {
+                       std::vector<SoleChange>& sole) {
   constexpr std::uint32_t kEnd = 0xffffffffu;
   // The lists as raw ranges, read through cursors; an exhausted list reads kEnd.
   const std::uint32_t* at[64];
@@ -288,7 +309,7 @@ void mark_sorted_union(SparseLevel<Value>& level, std::size_t lists, ListOf&& li
     std::uint32_t next = kEnd;
     for (std::size_t j = 0; j < lists; ++j) next = std::min(next, head(j));
     if (next == kEnd) return;
-    level.mark(next, epoch);
+    level.mark(next);
     SoleChange who{kNoOwner, 0};
     std::uint32_t holders = 0;
     for (std::size_t j = 0; j < lists; ++j) {
@@ -302,42 +323,35 @@ void mark_sorted_union(SparseLevel<Value>& level, std::size_t lists, ListOf&& li
   }
 }
 
-/// Marks on `level`, in increasing order, the nodes whose bits are set in `bits`, and clears
-/// those bits again.
+/// Lists on `level`, in increasing order, the nodes whose bits are set (its list is empty
+/// before: the bits were set with set()).
 template <class Value>
-void mark_set_bits(SparseLevel<Value>& level, std::vector<std::uint64_t>& bits,
-                   std::uint32_t epoch) {
-  const std::size_t words = (level.slots.size() + 63) / 64;
+void list_set_bits(SparseLevel<Value>& level) {
+  const std::size_t words = level.bits.size();
   for (std::size_t w = 0; w < words; ++w) {
-    std::uint64_t word = bits[w];
-    if (word == 0) continue;
-    bits[w] = 0;
-    do {
-      const auto v =
-          static_cast<std::uint32_t>(w * 64 + static_cast<unsigned>(__builtin_ctzll(word)));
-      level.mark(v, epoch);
+    std::uint64_t word = level.bits[w];
+    while (word != 0) {
+      level.list.push_back(
+          static_cast<std::uint32_t>(w * 64 + static_cast<unsigned>(__builtin_ctzll(word))));
       word &= word - 1;
-    } while (word != 0);
+    }
   }
 }
 
-/// Marks the union of several index lists on `level`, appending the nodes in increasing
-/// order, through a bitmap over the nodes (all zero between uses): linear in the lists'
-/// lengths plus node_count / 64, and no per-node record of which list holds it
-/// (mark_sorted_union gives that where it is needed).
+/// Marks the union of several index lists on `level` (empty before), listing the nodes in
+/// increasing order through the level's bitmap: linear in the lists' lengths plus
+/// node_count / 64, and no per-node record of which list holds it (mark_sorted_union gives
+/// that where it is needed).
 template <class Value, class ListOf>
-void mark_union(SparseLevel<Value>& level, std::size_t lists, ListOf&& list_of, std::uint32_t epoch,
-                std::vector<std::uint64_t>& bits) {
-  const std::size_t words = (level.slots.size() + 63) / 64;
-  if (bits.size() < words) bits.resize(words, 0);
+void mark_union(SparseLevel<Value>& level, std::size_t lists, ListOf&& list_of) {
   std::size_t total = 0;
   for (std::size_t j = 0; j < lists; ++j) {
     const auto& l = list_of(j);
-    for (std::uint32_t v : l) bits[v >> 6] |= std::uint64_t{1} << (v & 63);
+    for (std::uint32_t v : l) level.set(v);
     total += l.size();
   }
-  level.list.reserve(level.list.size() + total);
-  mark_set_bits(level, bits, epoch);
+  level.list.reserve(total);
+  list_set_bits(level);
 }
 
 /// Which parent links the pipeline follows: the K blended parents, or only the heaviest
@@ -385,18 +399,27 @@ struct ParentLinks {
 /// is the average transformation of its children", normalised).
 template <class Ops>
 void decompose(const ParentLinks& links, std::size_t level_count,
-               SparsePyramid<typename Ops::Value>& pyramid, std::uint32_t epoch) {
+               SparsePyramid<typename Ops::Value>& pyramid) {
   using Reg = typename Ops::Reg;
   for (std::size_t i = 0; i + 1 < level_count; ++i) {
     SparseLevel<typename Ops::Value>& fine = pyramid.levels[i];
     SparseLevel<typename Ops::Value>& coarse = pyramid.levels[i + 1];
     const ParentLinks::Level fl = links.level(i);
-    for (std::uint32_t c : fine.list) {
+    const std::size_t n_fine = fine.list.size();
+    constexpr std::size_t kAhead = 8;
+    for (std::size_t at = 0; at < n_fine; ++at) {
+      if (at + kAhead < n_fine) {
+        const std::uint32_t next = fine.list[at + kAhead];
+        prefetch(&fine.values[next]);
+        const ParentLinks::Level::Row ahead = fl.row(next);
+        for (std::uint32_t k = 0; k < ahead.count; ++k) prefetch(&coarse.values[ahead.parents[k]]);
+      }
+      const std::uint32_t c = fine.list[at];
       const Reg q = Ops::load(fine.val(c));
       const ParentLinks::Level::Row links_of_c = fl.row(c);
       for (std::uint32_t k = 0; k < links_of_c.count; ++k) {
         const std::uint32_t p = links_of_c.parents[k];
-        Reg acc = coarse.mark(p, epoch) ? Ops::zero() : Ops::load(coarse.val(p));
+        Reg acc = coarse.mark(p) ? Ops::zero() : Ops::load(coarse.val(p));
         Ops::add_offset(acc, links_of_c.weights[k], q);
         Ops::store(coarse.val(p), acc);
       }
@@ -457,22 +480,28 @@ typename Ops::Reg blend_residuals(NodeBlend rule, const typename Ops::Reg* r, co
 /// list[begin, end) of one level, four nodes at a time in structure-of-arrays registers
 /// (dq_soa.h): the parent sums are gathered per node as before, the rest of the arithmetic
 /// runs one node per lane, lane by lane the scalar code's operations, so bit-identical.
-template <class Slot>
-void blend_chunk_dq_intent(const std::uint32_t* list, std::size_t begin, std::size_t end,
-                           const ParentLinks::Level& fl, bool has_parents, const Slot* const* here,
-                           const Slot* const* coarse, std::size_t n_users, std::uint32_t epoch,
-                           Slot* out_slots) {
+inline void blend_chunk_dq_intent(const std::uint32_t* list, std::size_t begin, std::size_t end,
+                                  const ParentLinks::Level& fl, bool has_parents,
+                                  const LevelView<DualQuat>* here,
+                                  const LevelView<DualQuat>* coarse, std::size_t n_users,
+                                  DualQuat* out_values) {
   using namespace detail;
   const __m128 zero = _mm_setzero_ps();
   DQv acc[kMaxDiffs + 1][4];
   DQv q[kMaxDiffs][4];
-  std::uint32_t any_bits[kMaxDiffs + 1];
+  std::uint32_t any_bits[kMaxDiffs + 1];   // lanes with a parent that differs from the identity
+  std::uint32_t here_bits[kMaxDiffs + 1];  // lanes whose node differs from the identity
   DQ4 res[kMaxDiffs];
   __m128 mag[kMaxDiffs];
+  constexpr std::size_t kAhead = 8;  // nodes: two groups
   for (std::size_t g = begin; g < end; g += 4) {
     const std::size_t lanes = std::min<std::size_t>(4, end - g);
+    for (std::size_t a = g + kAhead; a < std::min(end, g + kAhead + 4); ++a) {
+      const std::uint32_t next = list[a];
+      for (std::size_t j = 0; j < n_users; ++j) prefetch(&here[j].values[next]);
+    }
     float weight_total[4];
-    for (std::size_t j = 0; j <= n_users; ++j) any_bits[j] = 0;
+    for (std::size_t j = 0; j <= n_users; ++j) any_bits[j] = here_bits[j] = 0;
     for (std::size_t lane = 0; lane < 4; ++lane) {
       // lanes past the end repeat the first node; their results are not stored
       const std::uint32_t c = list[g + (lane < lanes ? lane : 0)];
@@ -485,9 +514,8 @@ void blend_chunk_dq_intent(const std::uint32_t* list, std::size_t begin, std::si
           const float w = links_of_c.weights[k];
           wt += w;
           for (std::size_t j = 0; j <= n_users; ++j) {
-            const Slot& s = coarse[j][p];
-            if (s.stamp == epoch) {
-              dq_add_scaled_offset(acc[j][lane], w, dq_load(s.value));
+            if (coarse[j].has(p)) {
+              dq_add_scaled_offset(acc[j][lane], w, dq_load(coarse[j].values[p]));
               any_bits[j] |= 1u << lane;
             }
           }
@@ -495,8 +523,12 @@ void blend_chunk_dq_intent(const std::uint32_t* list, std::size_t begin, std::si
       }
       weight_total[lane] = wt;
       for (std::size_t j = 0; j < n_users; ++j) {
-        const Slot& s = here[j][c];
-        q[j][lane] = s.stamp == epoch ? dq_load(s.value) : dq_identity();
+        if (here[j].has(c)) {
+          q[j][lane] = dq_load(here[j].values[c]);
+          here_bits[j] |= 1u << lane;
+        } else {
+          q[j][lane] = dq_identity();
+        }
       }
     }
     const __m128 wt4 = _mm_loadu_ps(weight_total);
@@ -510,7 +542,14 @@ void blend_chunk_dq_intent(const std::uint32_t* list, std::size_t begin, std::si
       a.c[0] = _mm_add_ps(a.c[0], wt4);
       return dq4_canonical(dq4_normalized(a));
     };
+    int active_bits[kMaxDiffs];
     for (std::size_t j = 0; j < n_users; ++j) {
+      if ((any_bits[j] | here_bits[j]) == 0) {  // the identity in every lane: magnitude 0
+        res[j] = dq4_identity();
+        mag[j] = zero;
+        active_bits[j] = 0;
+        continue;
+      }
       const DQ4 qj = dq4_from(q[j][0], q[j][1], q[j][2], q[j][3]);
       if (any_bits[j] != 0) {
         const DQ4 r = dq4_canonical(dq4_mul(dq4_inverse(parent_blend(j)), qj));
@@ -520,16 +559,18 @@ void blend_chunk_dq_intent(const std::uint32_t* list, std::size_t begin, std::si
       }
       // residuals and stored values are canonical already
       mag[j] = dq4_magnitude_of_canonical(res[j]);
+      active_bits[j] = _mm_movemask_ps(_mm_cmpgt_ps(mag[j], zero));
     }
     // intent: acc = sum_j c_j (r_j - 1), c_j = m_j / sum_k s_jk m_k over active j, k
     DQ4 sum;
     for (__m128& x : sum.c) x = zero;
     __m128 magnitude_sum = zero;
     for (std::size_t j = 0; j < n_users; ++j) {
+      if (active_bits[j] == 0) continue;
       const __m128 active_j = _mm_cmpgt_ps(mag[j], zero);
-      if (_mm_movemask_ps(active_j) == 0) continue;
       __m128 same = zero;
       for (std::size_t k = 0; k < n_users; ++k) {
+        if (active_bits[k] == 0) continue;  // it would add + 0 in every lane
         const __m128 active_k = _mm_cmpgt_ps(mag[k], zero);
         __m128 term;
         if (k == j) {
@@ -559,7 +600,7 @@ void blend_chunk_dq_intent(const std::uint32_t* list, std::size_t begin, std::si
     DQv out[4];
     dq4_to(blended, out);
     for (std::size_t lane = 0; lane < lanes; ++lane)
-      dq_store(out_slots[list[g + lane]].value, out[lane]);
+      dq_store(out_values[list[g + lane]], out[lane]);
   }
 }
 #endif
@@ -567,24 +608,18 @@ void blend_chunk_dq_intent(const std::uint32_t* list, std::size_t begin, std::si
 /// Marks the nodes the result needs above level 0: the ancestors of the vertices listed
 /// on merged.levels[0].
 template <class Value>
-void mark_ancestors(const ParentLinks& links, std::size_t level_count, SparsePyramid<Value>& merged,
-                    std::uint32_t epoch, std::vector<std::uint64_t>& bits) {
-  // Through a bitmap of the coarser level (small enough to stay in cache, unlike the
-  // slots' stamps); each level's list comes out in increasing order. The blend computes
-  // every node on its own, so the order changes no result.
+void mark_ancestors(const ParentLinks& links, std::size_t level_count, SparsePyramid<Value>& merged) {
+  // Through the coarser level's bitmap (small enough to stay in cache), so each level's
+  // list comes out in increasing order. The blend computes every node on its own, so the
+  // order changes no result.
   for (std::size_t i = 0; i + 1 < level_count; ++i) {
     SparseLevel<Value>& coarse = merged.levels[i + 1];
-    const std::size_t words = (coarse.slots.size() + 63) / 64;
-    if (bits.size() < words) bits.resize(words, 0);
     const ParentLinks::Level fl = links.level(i);
     for (std::uint32_t c : merged.levels[i].list) {
       const ParentLinks::Level::Row links_of_c = fl.row(c);
-      for (std::uint32_t k = 0; k < links_of_c.count; ++k) {
-        const std::uint32_t p = links_of_c.parents[k];
-        bits[p >> 6] |= std::uint64_t{1} << (p & 63);
-      }
+      for (std::uint32_t k = 0; k < links_of_c.count; ++k) coarse.set(links_of_c.parents[k]);
     }
-    mark_set_bits(coarse, bits, epoch);
+    list_set_bits(coarse);
   }
 }
 
@@ -594,35 +629,35 @@ void mark_ancestors(const ParentLinks& links, std::size_t level_count, SparsePyr
 template <class Ops>
 void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
                            std::span<SparsePyramid<typename Ops::Value>> users,
-                           SparsePyramid<typename Ops::Value>& merged, std::uint32_t epoch,
-                           NodeBlend rule, detail::WorkerPool& pool) {
+                           SparsePyramid<typename Ops::Value>& merged, NodeBlend rule,
+                           detail::WorkerPool& pool) {
   using Value = typename Ops::Value;
   using Reg = typename Ops::Reg;
-  using Slot = typename SparseLevel<Value>::Slot;
+  using View = LevelView<Value>;
   const auto user_count = static_cast<std::uint32_t>(users.size());
   const std::size_t n_users = users.size();
   for (std::size_t level = level_count; level-- > 0;) {
     SparseLevel<Value>& out = merged.levels[level];
     const bool has_parents = level + 1 < level_count;
     const ParentLinks::Level fl = links.level(level);
-    // Slot arrays of every diff at this level and at the next coarser one, then the merged
-    // result's coarser level last.
-    const Slot* here[kMaxDiffs];
-    const Slot* coarse[kMaxDiffs + 1];
+    // Every diff at this level and at the next coarser one, then the merged result's
+    // coarser level last.
+    View here[kMaxDiffs];
+    View coarse[kMaxDiffs + 1];
     for (std::size_t j = 0; j < n_users; ++j) {
-      here[j] = users[j].levels[level].slots.data();
-      coarse[j] = has_parents ? users[j].levels[level + 1].slots.data() : nullptr;
+      here[j] = View::of(users[j].levels[level]);
+      if (has_parents) coarse[j] = View::of(users[j].levels[level + 1]);
     }
-    coarse[n_users] = has_parents ? merged.levels[level + 1].slots.data() : nullptr;
-    Slot* out_slots = out.slots.data();
+    if (has_parents) coarse[n_users] = View::of(merged.levels[level + 1]);
+    Value* out_values = out.values.data();
     const std::uint32_t* out_list = out.list.data();
     // Each node reads only coarser, finished levels and writes only itself.
 #if defined(__SSE2__)
     if constexpr (std::is_same_v<Ops, DqOps>) {
       if (rule == NodeBlend::intent) {
         pool.for_chunks(out.list.size(), 512, [&](std::size_t begin, std::size_t end) {
-          blend_chunk_dq_intent(out_list, begin, end, fl, has_parents, here, coarse, n_users, epoch,
-                                out_slots);
+          blend_chunk_dq_intent(out_list, begin, end, fl, has_parents, here, coarse, n_users,
+                                out_values);
         });
         continue;
       }
@@ -650,9 +685,8 @@ void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
             const float w = links_of_c.weights[k];
             weight_total += w;
             for (std::size_t j = 0; j <= n_users; ++j) {
-              const Slot& s = coarse[j][p];
-              if (s.stamp == epoch) {
-                Ops::add_offset(parent_acc[j], w, Ops::load(s.value));
+              if (coarse[j].has(p)) {
+                Ops::add_offset(parent_acc[j], w, Ops::load(coarse[j].values[p]));
                 parent_any[j] = true;
               }
             }
@@ -660,8 +694,7 @@ void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
         }
         // identity exactly when no parent differs from it, so untouched regions stay exact
         for (std::size_t j = 0; j < n_users; ++j) {
-          const Slot& s = here[j][c];
-          const Reg q = s.stamp == epoch ? Ops::load(s.value) : Ops::identity();
+          const Reg q = here[j].has(c) ? Ops::load(here[j].values[c]) : Ops::identity();
           residuals[j] = parent_any[j]
                              ? Ops::residual(Ops::finish_average(parent_acc[j], weight_total), q)
                              : q;
@@ -669,7 +702,7 @@ void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
         }
         const Reg residual = blend_residuals<Ops>(rule, residuals, magnitudes, n_users, user_count);
         Ops::store(
-            out_slots[c].value,
+            out_values[c],
             parent_any[n_users]
                 ? Ops::compose(Ops::finish_average(parent_acc[n_users], weight_total), residual)
                 : residual);
@@ -747,39 +780,22 @@ std::vector<std::size_t> canonical_order(std::span<const Diff* const> diffs,
 // ---------------------------------------------------------------------------------------
 
 struct Merger::Workspace {
-  std::uint32_t epoch = 0;
   std::vector<SparsePyramid<DualQuat>> dq_users;
   SparsePyramid<DualQuat> dq_merged;
   std::vector<SparsePyramid<Vec4>> vec_users;
   SparsePyramid<Vec4> vec_merged;
-  /// Per diff: where each vertex's edited position sits in the diff (valid when stamped).
+  /// Per diff: where each vertex's edited position sits in the diff (valid where `changed`).
   struct Lookup {
     std::vector<std::uint32_t> slot;
-    std::vector<std::uint32_t> stamp;
+    detail::BitSet changed;  ///< all clear between merges
     detail::VertexIsometryScratch isometry;
     std::vector<std::uint32_t> touched;
   };
   std::vector<Lookup> lookups;
   std::vector<SoleChange> sole;
-  std::vector<std::uint64_t> union_bits;  ///< mark_union's bitmap, all zero between uses
   std::vector<Vec3f> moved;  ///< merged positions of the changed vertices, before listing
   std::vector<std::size_t> chunk_offset;  ///< where each chunk of them starts in the list
   detail::WorkerPool pool;
-
-  std::uint32_t next_epoch() {
-    if (++epoch == 0) {  // wrapped: every stamp must be forgotten
-      auto clear = [](auto& pyramid) {
-        for (auto& l : pyramid.levels) l.forget();
-      };
-      for (auto& p : dq_users) clear(p);
-      clear(dq_merged);
-      for (auto& p : vec_users) clear(p);
-      clear(vec_merged);
-      for (auto& l : lookups) std::fill(l.stamp.begin(), l.stamp.end(), 0);
-      epoch = 1;
-    }
-    return epoch;
-  }
 };
 
 Merger::Merger(const Hierarchy& hierarchy)
@@ -821,10 +837,10 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
   const MethodTraits t = traits(method);
   Workspace& ws = *workspace_;
   timings_ = {};
-  // Per node visited: its value, its stamp and its parent links (index + weight).
+  // Per node visited: its value and its parent links (index + weight); its bit is noise.
   auto count_work = [&](const auto& user_pyramids, std::uint32_t user_count,
                         const auto& merged_pyramid, std::size_t levels, std::size_t value_bytes) {
-    const std::size_t per_node = value_bytes + 4 + hierarchy_.stride() * 8;
+    const std::size_t per_node = value_bytes + hierarchy_.stride() * 8;
     auto add = [&](const auto& pyramid) {
       for (std::size_t i = 0; i < levels; ++i) {
         timings_.nodes_visited += pyramid.levels[i].list.size();
@@ -898,28 +914,25 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
   // ---- positions ----
   {
     auto t0 = Clock::now();
-    const std::uint32_t epoch = ws.next_epoch();
     // edited-position lookups per diff (filled in the diff's own task below)
     for (std::uint32_t u = 0; u < users; ++u) {
       auto& lk = ws.lookups[u];
-      if (lk.slot.size() < vertex_count) {
-        lk.slot.resize(vertex_count);
-        lk.stamp.resize(vertex_count, 0);
-      }
+      if (lk.slot.size() < vertex_count) lk.slot.resize(vertex_count);
+      lk.changed.resize(vertex_count);
     }
     auto edited_of = [&](std::uint32_t u) {
       const auto& lk = ws.lookups[u];
       const AttributeDiff& pd = diffs[order[u]]->positions;
-      return [&lk, &pd, &base, epoch](std::uint32_t v) -> Vec3f {
-        if (lk.stamp[v] != epoch) return base.positions[v];
+      return [&lk, &pd, &base](std::uint32_t v) -> Vec3f {
+        if (!lk.changed.test(v)) return base.positions[v];
         const float* p = pd.values.data() + 3 * std::size_t{lk.slot[v]};
         return {p[0], p[1], p[2]};
       };
     };
     if (t.isometry) {
       if (ws.dq_users.size() < users) ws.dq_users.resize(users);
-      for (std::uint32_t u = 0; u < users; ++u) ws.dq_users[u].reserve(hierarchy_, level_count);
-      ws.dq_merged.reserve(hierarchy_, level_count);
+      for (std::uint32_t u = 0; u < users; ++u) ws.dq_users[u].begin(hierarchy_, level_count);
+      ws.dq_merged.begin(hierarchy_, level_count);
       // One region, one task per diff (its lookup, isometries and averages: independent of
       // the other diffs), plus one task, listed last so that the thread that finishes first
       // takes it, for the nodes the result needs (the union of the changed vertices and
@@ -929,9 +942,8 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
         if (u == users) {
           mark_union(
               ws.dq_merged.levels[0], users,
-              [&](std::size_t j) -> const auto& { return diffs[order[j]]->positions.indices; },
-              epoch, ws.union_bits);
-          mark_ancestors(links, level_count, ws.dq_merged, epoch, ws.union_bits);
+              [&](std::size_t j) -> const auto& { return diffs[order[j]]->positions.indices; });
+          mark_ancestors(links, level_count, ws.dq_merged);
           return;
         }
         const auto task_t0 = Clock::now();
@@ -939,20 +951,22 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
         const AttributeDiff& pd = diffs[order[u]]->positions;
         for (std::uint32_t i = 0; i < pd.indices.size(); ++i) {
           lk.slot[pd.indices[i]] = i;
-          lk.stamp[pd.indices[i]] = epoch;
+          lk.changed.insert(pd.indices[i]);
         }
         lk.isometry.resize(vertex_count, base.face_count());
         auto& level0 = ws.dq_users[u].levels[0];
         detail::compute_vertex_isometries(
             hierarchy_.topology(), base.positions, pd.indices,
             edited_of(static_cast<std::uint32_t>(u)), lk.isometry,
-            [&level0, epoch](std::uint32_t v, const DualQuat& q) {
-              level0.slots[v] = {q, epoch};
+            [&level0](std::uint32_t v, const DualQuat& q) {
+              level0.values[v] = q;
+              level0.set(v);
             },
             lk.touched, local);
+        lk.changed.clear(pd.indices);
         level0.list.assign(lk.touched.begin(), lk.touched.end());
         iso_task_ms[u] = ms_since(task_t0);
-        decompose<DqOps>(links, level_count, ws.dq_users[u], epoch);
+        decompose<DqOps>(links, level_count, ws.dq_users[u]);
       });
       // The region's time split: isometries = the longest diff's isometry part, the rest
       // (decomposition and its imbalance) to decompose.
@@ -962,9 +976,16 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
       timings_.decompose_ms += std::max(0.0, region_ms - iso_ms);
       t0 = Clock::now();
       blend_and_reconstruct<DqOps>(links, level_count, std::span(ws.dq_users.data(), users),
-                                   ws.dq_merged, epoch, t.node_blend, ws.pool);
+                                   ws.dq_merged, t.node_blend, ws.pool);
       timings_.blend_ms += ms_since(t0);
       count_work(ws.dq_users, users, ws.dq_merged, level_count, sizeof(DualQuat));
+      if (std::getenv("CSC_DEBUG_LEVELS")) {
+        for (std::size_t i = 0; i < level_count; ++i) {
+          std::fprintf(stderr, "L%zu nodes %u", i, hierarchy_.levels()[i].node_count);
+          for (std::uint32_t u = 0; u < users; ++u) std::fprintf(stderr, " u%u %zu", u, ws.dq_users[u].levels[i].list.size());
+          std::fprintf(stderr, " merged %zu\n", ws.dq_merged.levels[i].list.size());
+        }
+      }
       t0 = Clock::now();
       const auto& changed_union = ws.dq_merged.levels[0].list;  // increasing
       // Moved positions and, per chunk, how many differ from the base, in parallel; then each
@@ -1011,8 +1032,8 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
         using Ops = decltype(ops);
         using Value = typename Ops::Value;
         if (ws.vec_users.size() < users) ws.vec_users.resize(users);
-        for (std::uint32_t u = 0; u < users; ++u) ws.vec_users[u].reserve(hierarchy_, level_count);
-        ws.vec_merged.reserve(hierarchy_, level_count);
+        for (std::uint32_t u = 0; u < users; ++u) ws.vec_users[u].begin(hierarchy_, level_count);
+        ws.vec_merged.begin(hierarchy_, level_count);
         for (std::uint32_t u = 0; u < users; ++u) {
           auto& level0 = ws.vec_users[u].levels[0];
           const AttributeDiff& pd = diffs[order[u]]->positions;
@@ -1021,14 +1042,14 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
             const float* e = pd.values.data() + 3 * std::size_t{i};
             const Vec3f a = local.to_local(base.positions[v]);
             const Vec3f b = local.to_local({e[0], e[1], e[2]});
-            level0.mark(v, epoch);
+            level0.mark(v);
             level0.val(v) = Value{{b.x - a.x, b.y - a.y, b.z - a.z, 0}};
           }
         }
         timings_.isometry_ms += ms_since(t0);
         t0 = Clock::now();
         ws.pool.run(users, [&](std::size_t u) {
-          decompose<Ops>(links, level_count, ws.vec_users[u], epoch);
+          decompose<Ops>(links, level_count, ws.vec_users[u]);
         });
         timings_.decompose_ms += ms_since(t0);
         t0 = Clock::now();
@@ -1036,10 +1057,10 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
         mark_sorted_union(
             out.levels[0],
             users, [&](std::size_t u) -> const auto& { return diffs[order[u]]->positions.indices; },
-            epoch, ws.sole);
-        mark_ancestors(links, level_count, out, epoch, ws.union_bits);
+            ws.sole);
+        mark_ancestors(links, level_count, out);
         blend_and_reconstruct<Ops>(links, level_count, std::span(ws.vec_users.data(), users), out,
-                                   epoch, t.node_blend, ws.pool);
+                                   t.node_blend, ws.pool);
         timings_.blend_ms += ms_since(t0);
         count_work(ws.vec_users, users, ws.vec_merged, level_count, sizeof(Vec4));
         t0 = Clock::now();
@@ -1065,7 +1086,6 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
     const std::uint32_t width = channel.desc.width;
     ChannelDiff out_diff{channel.desc, {}};
     auto t0 = Clock::now();
-    const std::uint32_t epoch = ws.next_epoch();
     const TranslationBlend blend = t.blend;
     // Where two different colours overlap the result is clamped to the channel's range.
     const NodeBlend channel_blend = t.node_blend;
@@ -1074,8 +1094,8 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
       using Ops = decltype(ops);
       using Value = typename Ops::Value;
       if (ws.vec_users.size() < users) ws.vec_users.resize(users);
-      for (std::uint32_t u = 0; u < users; ++u) ws.vec_users[u].reserve(hierarchy_, channel_levels);
-      ws.vec_merged.reserve(hierarchy_, channel_levels);
+      for (std::uint32_t u = 0; u < users; ++u) ws.vec_users[u].begin(hierarchy_, channel_levels);
+      ws.vec_merged.begin(hierarchy_, channel_levels);
       auto& out = ws.vec_merged;
       static const std::vector<std::uint32_t> kNone;
       std::array<const std::vector<std::uint32_t>*, kMaxDiffs> changed_lists{};
@@ -1097,20 +1117,20 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
                                         cd.change.values[std::size_t{i} * width + k]);
               d.v[k] = e - b;
             }
-            level0.mark(v, epoch);
+            level0.mark(v);
             level0.val(v) = d;
           }
         }
       }
       mark_sorted_union(
           out.levels[0], users, [&](std::size_t u) -> const auto& { return *changed_lists[u]; },
-          epoch, ws.sole);
+          ws.sole);
       ws.pool.run(users, [&](std::size_t u) {
-        decompose<Ops>(links, channel_levels, ws.vec_users[u], epoch);
+        decompose<Ops>(links, channel_levels, ws.vec_users[u]);
       });
-      mark_ancestors(links, channel_levels, out, epoch, ws.union_bits);
+      mark_ancestors(links, channel_levels, out);
       blend_and_reconstruct<Ops>(links, channel_levels, std::span(ws.vec_users.data(), users), out,
-                                 epoch, channel_blend, ws.pool);
+                                 channel_blend, ws.pool);
       const auto& list = out.levels[0].list;  // increasing
       for (std::size_t i = 0; i < list.size(); ++i) {
         const std::uint32_t v = list[i];

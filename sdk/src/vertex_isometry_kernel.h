@@ -139,15 +139,16 @@ inline bool face_rotation_kernel_f1(const Vec3f& a0, const Vec3f& a1, const Vec3
 /// face_rotation_kernel for two faces at once, one per lane of SSE2 doubles: every lane
 /// performs exactly the scalar kernel's IEEE operations in the same order (the degenerate
 /// tests become masks), so results are bit-identical to two scalar calls. Vertices are given
-/// as p[face][0..5] = a0, a1, a2, b0, b1, b2.
-inline void face_rotation_kernel_x2(const Vec3f (&p)[2][6], Quat (&out)[2], bool (&ok)[2]) {
+/// as p[face][0..5] -> a0, a1, a2, b0, b1, b2 (read in place: no copy).
+inline void face_rotation_kernel_x2(const Vec3f* const (&p)[2][6], Quat (&out)[2],
+                                    bool (&ok)[2]) {
   struct D3 {
     __m128d x, y, z;
   };
   auto load = [&](int i) -> D3 {
-    return {_mm_set_pd(double(p[1][i].x), double(p[0][i].x)),
-            _mm_set_pd(double(p[1][i].y), double(p[0][i].y)),
-            _mm_set_pd(double(p[1][i].z), double(p[0][i].z))};
+    return {_mm_set_pd(double(p[1][i]->x), double(p[0][i]->x)),
+            _mm_set_pd(double(p[1][i]->y), double(p[0][i]->y)),
+            _mm_set_pd(double(p[1][i]->z), double(p[0][i]->z))};
   };
   auto sub = [](const D3& u, const D3& v) -> D3 {
     return {_mm_sub_pd(u.x, v.x), _mm_sub_pd(u.y, v.y), _mm_sub_pd(u.z, v.z)};
@@ -235,14 +236,15 @@ inline void face_rotation_kernel_x2(const Vec3f (&p)[2][6], Quat (&out)[2], bool
 /// the double kernel. The same formulas as face_rotation_kernel, in float: deterministic
 /// (IEEE single operations in a fixed order on every SSE2 CPU), not bit-identical to it;
 /// each lane is bit-identical to face_rotation_kernel_f1.
-inline void face_rotation_kernel_f4(const Vec3f (&p)[4][6], Quat (&out)[4], bool (&ok)[4]) {
+inline void face_rotation_kernel_f4(const Vec3f* const (&p)[4][6], Quat (&out)[4],
+                                    bool (&ok)[4]) {
   struct F3 {
     __m128 x, y, z;
   };
   auto load = [&](int i) -> F3 {
-    return {_mm_set_ps(p[3][i].x, p[2][i].x, p[1][i].x, p[0][i].x),
-            _mm_set_ps(p[3][i].y, p[2][i].y, p[1][i].y, p[0][i].y),
-            _mm_set_ps(p[3][i].z, p[2][i].z, p[1][i].z, p[0][i].z)};
+    return {_mm_set_ps(p[3][i]->x, p[2][i]->x, p[1][i]->x, p[0][i]->x),
+            _mm_set_ps(p[3][i]->y, p[2][i]->y, p[1][i]->y, p[0][i]->y),
+            _mm_set_ps(p[3][i]->z, p[2][i]->z, p[1][i]->z, p[0][i]->z)};
   };
   auto mul = [](__m128 a, __m128 b) { return _mm_mul_ps(a, b); };
   auto add = [](__m128 a, __m128 b) { return _mm_add_ps(a, b); };
@@ -321,31 +323,45 @@ inline void face_rotation_kernel_f4(const Vec3f (&p)[4][6], Quat (&out)[4], bool
 }
 #endif
 
+/// A set of indices as one bit each: 40 KB for the faces of a 320K-face mesh, so the
+/// membership tests of the sparse loops hit L1/L2 instead of a 4-byte stamp per element.
+/// Cleared word by word from the list of what was inserted.
+struct BitSet {
+  std::vector<std::uint64_t> words;
+  void resize(std::size_t n) {
+    if (words.size() < (n + 63) / 64) words.resize((n + 63) / 64, 0);
+  }
+  bool test(std::uint32_t i) const { return (words[i >> 6] >> (i & 63) & 1) != 0; }
+  /// Sets bit i; true if it was clear.
+  bool insert(std::uint32_t i) {
+    std::uint64_t& w = words[i >> 6];
+    const std::uint64_t bit = std::uint64_t{1} << (i & 63);
+    if ((w & bit) != 0) return false;
+    w |= bit;
+    return true;
+  }
+  /// Clears every bit of the inserted indices `inserted` (zeroing their words).
+  void clear(std::span<const std::uint32_t> inserted) {
+    for (std::uint32_t i : inserted) words[i >> 6] = 0;
+  }
+};
+
 struct VertexIsometryScratch {
-  std::vector<std::uint32_t> face_stamp;
-  std::vector<std::uint32_t> vertex_stamp;
+  BitSet face_seen;    ///< all clear between calls
+  BitSet vertex_seen;  ///< all clear between calls
   std::vector<Quat> rotation_sum;    ///< sum of (q_face - 1) over changed faces
   std::vector<std::uint32_t> faces;  ///< faces around changed vertices, first-touch order
   std::vector<Quat> face_offset;     ///< per listed face: q_face - 1 (zero if degenerate)
   std::vector<std::uint32_t> redo;   ///< positions in `faces` left to the double kernel
   std::vector<Vec3f> edited;         ///< per touched vertex: its edited position
-  std::uint32_t epoch = 0;
 
   void resize(std::size_t vertex_count, std::size_t face_count) {
-    if (face_stamp.size() < face_count) face_stamp.resize(face_count, 0);
-    if (vertex_stamp.size() < vertex_count) {
-      vertex_stamp.resize(vertex_count, 0);
+    face_seen.resize(face_count);
+    vertex_seen.resize(vertex_count);
+    if (rotation_sum.size() < vertex_count) {
       rotation_sum.resize(vertex_count);
       edited.resize(vertex_count);
     }
-  }
-  std::uint32_t next_epoch() {
-    if (++epoch == 0) {  // wrapped: forget every stamp
-      std::fill(face_stamp.begin(), face_stamp.end(), 0);
-      std::fill(vertex_stamp.begin(), vertex_stamp.end(), 0);
-      epoch = 1;
-    }
-    return epoch;
   }
 };
 
@@ -359,26 +375,22 @@ void compute_vertex_isometries(const Topology& topology, std::span<const Vec3f> 
                                std::span<const std::uint32_t> changed, EditedPosition&& edited,
                                VertexIsometryScratch& scratch, Store&& store,
                                std::vector<std::uint32_t>& touched, const Frame& frame = {}) {
-  const std::uint32_t epoch = scratch.next_epoch();
   touched.clear();
   scratch.faces.clear();
   const auto& vf = topology.vertex_faces;
   // 1. the faces around changed vertices and the vertices they touch
   for (std::uint32_t v : changed) {
-    if (scratch.vertex_stamp[v] != epoch) {  // also a changed vertex on no face
-      scratch.vertex_stamp[v] = epoch;
+    if (scratch.vertex_seen.insert(v)) {  // also a changed vertex on no face
       scratch.rotation_sum[v] = {0, 0, 0, 0};
       scratch.edited[v] = edited(v);
       touched.push_back(v);
     }
     for (std::uint32_t i = vf.offsets[v]; i < vf.offsets[v + 1]; ++i) {
       const std::uint32_t f = vf.items[i];
-      if (scratch.face_stamp[f] == epoch) continue;
-      scratch.face_stamp[f] = epoch;
+      if (!scratch.face_seen.insert(f)) continue;
       scratch.faces.push_back(f);
       for (std::uint32_t u : topology.triangles[f]) {
-        if (scratch.vertex_stamp[u] != epoch) {
-          scratch.vertex_stamp[u] = epoch;
+        if (scratch.vertex_seen.insert(u)) {
           scratch.rotation_sum[u] = {0, 0, 0, 0};
           scratch.edited[u] = edited(u);
           touched.push_back(u);
@@ -386,6 +398,8 @@ void compute_vertex_isometries(const Topology& topology, std::span<const Vec3f> 
       }
     }
   }
+  scratch.face_seen.clear(scratch.faces);
+  scratch.vertex_seen.clear(touched);
   // 2. their rotations: independent, so the divisions and roots of successive faces overlap.
   // Well-conditioned faces in single precision four at a time, the rest (listed in `redo`,
   // in increasing order) in double.
@@ -396,12 +410,12 @@ void compute_vertex_isometries(const Topology& topology, std::span<const Vec3f> 
 #if defined(__SSE2__)
   std::size_t k4 = 0;
   for (; k4 + 4 <= scratch.faces.size(); k4 += 4) {
-    Vec3f p[4][6];
+    const Vec3f* p[4][6];
     for (int f = 0; f < 4; ++f) {
       const Triangle& t = topology.triangles[scratch.faces[k4 + f]];
       for (int i = 0; i < 3; ++i) {
-        p[f][i] = base[t[i]];
-        p[f][3 + i] = scratch.edited[t[i]];
+        p[f][i] = &base[t[i]];
+        p[f][3 + i] = &scratch.edited[t[i]];
       }
     }
     Quat q[4];
@@ -416,12 +430,12 @@ void compute_vertex_isometries(const Topology& topology, std::span<const Vec3f> 
   }
   for (; k4 < scratch.faces.size(); ++k4) redo.push_back(static_cast<std::uint32_t>(k4));
   for (; first_scalar + 2 <= redo.size(); first_scalar += 2) {
-    Vec3f p[2][6];
+    const Vec3f* p[2][6];
     for (int f = 0; f < 2; ++f) {
       const Triangle& t = topology.triangles[scratch.faces[redo[first_scalar + f]]];
       for (int i = 0; i < 3; ++i) {
-        p[f][i] = base[t[i]];
-        p[f][3 + i] = scratch.edited[t[i]];
+        p[f][i] = &base[t[i]];
+        p[f][3 + i] = &scratch.edited[t[i]];
       }
     }
     Quat q[2];

@@ -19,6 +19,19 @@ namespace {
 #if defined(__SSE2__)
 bool same_bits(const Quat& a, const Quat& b) { return std::memcmp(&a, &b, sizeof(Quat)) == 0; }
 
+/// The kernels read their points in place, through pointers.
+template <int N>
+struct PointsOf {
+  const Vec3f* p[N][6];
+};
+template <int N>
+PointsOf<N> points_of(const Vec3f (&p)[N][6]) {
+  PointsOf<N> out;
+  for (int f = 0; f < N; ++f)
+    for (int i = 0; i < 6; ++i) out.p[f][i] = &p[f][i];
+  return out;
+}
+
 TEST(IsometryFaceRotationSimd, TwoLanesEqualTheScalarKernelBitForBit) {
   SplitMix64 rng;
   rng.state = 20261124;
@@ -52,7 +65,7 @@ TEST(IsometryFaceRotationSimd, TwoLanesEqualTheScalarKernelBitForBit) {
     }
     Quat q[2];
     bool ok[2];
-    detail::face_rotation_kernel_x2(p, q, ok);
+    detail::face_rotation_kernel_x2(points_of(p).p, q, ok);
     for (int f = 0; f < 2; ++f) {
       Quat ref;
       const bool ref_ok =
@@ -109,7 +122,7 @@ TEST(IsometryFaceRotationSimd, SinglePrecisionMatchesTheDoubleKernelWhereItAnswe
     }
     Quat q[4];
     bool ok[4];
-    detail::face_rotation_kernel_f4(p, q, ok);
+    detail::face_rotation_kernel_f4(points_of(p).p, q, ok);
     for (int f = 0; f < 4; ++f) {
       Quat q1;  // the scalar form: the same answer bit for bit, the same lanes declined
       const bool ok1 =
