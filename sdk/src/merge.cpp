@@ -12,8 +12,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
-#include <cstdio>
-#include <cstdlib>
 #include <exception>
 #include <numeric>
 #include <string>
@@ -979,13 +977,6 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
                                    ws.dq_merged, t.node_blend, ws.pool);
       timings_.blend_ms += ms_since(t0);
       count_work(ws.dq_users, users, ws.dq_merged, level_count, sizeof(DualQuat));
-      if (std::getenv("CSC_DEBUG_LEVELS")) {
-        for (std::size_t i = 0; i < level_count; ++i) {
-          std::fprintf(stderr, "L%zu nodes %u", i, hierarchy_.levels()[i].node_count);
-          for (std::uint32_t u = 0; u < users; ++u) std::fprintf(stderr, " u%u %zu", u, ws.dq_users[u].levels[i].list.size());
-          std::fprintf(stderr, " merged %zu\n", ws.dq_merged.levels[i].list.size());
-        }
-      }
       t0 = Clock::now();
       const auto& changed_union = ws.dq_merged.levels[0].list;  // increasing
       // Moved positions and, per chunk, how many differ from the base, in parallel; then each
