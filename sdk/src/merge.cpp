@@ -603,27 +603,30 @@ inline void blend_chunk_dq_intent(const std::uint32_t* list, std::size_t begin, 
 }
 #endif
 
-/// Marks the nodes the result needs above level 0: the ancestors of the vertices listed
-/// on merged.levels[0].
+/// Marks the nodes the result needs above level 0, a superset of the ancestors of the
+/// vertices listed on merged.levels[0]: the union of the diffs' own nodes there (each
+/// diff's pyramid holds the ancestors of every vertex it changed, after decompose()). A
+/// word-wise OR of their bitmaps, so no parent links are read; each level's list comes out
+/// in increasing order. The blend computes every node on its own from coarser levels, so
+/// nodes beyond the ancestors change no result.
 template <class Value>
-void mark_ancestors(const ParentLinks& links, std::size_t level_count, SparsePyramid<Value>& merged) {
-  // Through the coarser level's bitmap (small enough to stay in cache), so each level's
-  // list comes out in increasing order. The blend computes every node on its own, so the
-  // order changes no result.
-  for (std::size_t i = 0; i + 1 < level_count; ++i) {
-    SparseLevel<Value>& coarse = merged.levels[i + 1];
-    const ParentLinks::Level fl = links.level(i);
-    for (std::uint32_t c : merged.levels[i].list) {
-      const ParentLinks::Level::Row links_of_c = fl.row(c);
-      for (std::uint32_t k = 0; k < links_of_c.count; ++k) coarse.set(links_of_c.parents[k]);
+void mark_coarse_union(std::span<const SparsePyramid<Value>> users, std::size_t level_count,
+                       SparsePyramid<Value>& merged) {
+  for (std::size_t i = 1; i < level_count; ++i) {
+    SparseLevel<Value>& out = merged.levels[i];
+    const std::size_t words = out.bits.size();
+    for (std::size_t w = 0; w < words; ++w) {
+      std::uint64_t any = 0;
+      for (const SparsePyramid<Value>& u : users) any |= u.levels[i].bits[w];
+      out.bits[w] = any;
     }
-    list_set_bits(coarse);
+    list_set_bits(out);
   }
 }
 
 /// Residuals of every diff at each needed node, blended per node, recomposed from the
 /// coarsest level down (paper §3.1 "Final Merged Mesh"). Fills merged.levels[0] for the
-/// nodes listed there, and the coarser levels for the nodes mark_ancestors() listed.
+/// nodes listed there, and the coarser levels for the nodes mark_coarse_union() listed.
 template <class Ops>
 void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
                            std::span<SparsePyramid<typename Ops::Value>> users,
@@ -933,15 +936,14 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
       ws.dq_merged.begin(hierarchy_, level_count);
       // One region, one task per diff (its lookup, isometries and averages: independent of
       // the other diffs), plus one task, listed last so that the thread that finishes first
-      // takes it, for the nodes the result needs (the union of the changed vertices and
-      // their ancestors): it writes only the merged pyramid's marks, so no barrier between.
+      // takes it, for the vertices the result needs (the union of the changed ones): it
+      // writes only the merged pyramid's level 0, so no barrier between.
       double iso_task_ms[kMaxDiffs] = {};
       ws.pool.run(users + 1, [&](std::size_t u) {
         if (u == users) {
           mark_union(
               ws.dq_merged.levels[0], users,
               [&](std::size_t j) -> const auto& { return diffs[order[j]]->positions.indices; });
-          mark_ancestors(links, level_count, ws.dq_merged);
           return;
         }
         const auto task_t0 = Clock::now();
@@ -966,6 +968,8 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
         iso_task_ms[u] = ms_since(task_t0);
         decompose<DqOps>(links, level_count, ws.dq_users[u]);
       });
+      mark_coarse_union<DualQuat>(std::span(ws.dq_users.data(), users), level_count,
+                                  ws.dq_merged);
       // The region's time split: isometries = the longest diff's isometry part, the rest
       // (decomposition and its imbalance) to decompose.
       const double region_ms = ms_since(t0);
@@ -1049,7 +1053,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
             out.levels[0],
             users, [&](std::size_t u) -> const auto& { return diffs[order[u]]->positions.indices; },
             ws.sole);
-        mark_ancestors(links, level_count, out);
+        mark_coarse_union<Value>(std::span(ws.vec_users.data(), users), level_count, out);
         blend_and_reconstruct<Ops>(links, level_count, std::span(ws.vec_users.data(), users), out,
                                    t.node_blend, ws.pool);
         timings_.blend_ms += ms_since(t0);
@@ -1119,7 +1123,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
       ws.pool.run(users, [&](std::size_t u) {
         decompose<Ops>(links, channel_levels, ws.vec_users[u]);
       });
-      mark_ancestors(links, channel_levels, out);
+      mark_coarse_union<Value>(std::span(ws.vec_users.data(), users), channel_levels, out);
       blend_and_reconstruct<Ops>(links, channel_levels, std::span(ws.vec_users.data(), users), out,
                                  channel_blend, ws.pool);
       const auto& list = out.levels[0].list;  // increasing
