@@ -8,12 +8,14 @@
 #include <cmath>
 
 #include "csculpt/dual_quat.h"
+#include "simd_isa.h"
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
 
 namespace csculpt::detail {
+CSCULPT_ISA_BEGIN
 
 #if defined(__SSE2__)
 
@@ -137,4 +139,5 @@ inline float dq_distance(const DQv& a, const DQv& b) {
 
 #endif  // __SSE2__
 
+CSCULPT_ISA_END
 }  // namespace csculpt::detail

@@ -8,6 +8,9 @@
 #include "csculpt/merge.h"
 
 #include <algorithm>
+#include <atomic>
+#include <cstdlib>
+#include <string_view>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -21,12 +24,45 @@
 #include "csculpt/dual_quat.h"
 #include "csculpt/error.h"
 #include "dq_simd.h"
+#include "blend_kernel.h"
 #include "dq_soa.h"
 #include "vertex_isometry_kernel.h"
 #include "aligned_allocator.h"
 #include "worker_pool.h"
 
 namespace csculpt {
+namespace {
+void blend_chunk_sse2(const detail::BlendLevelArgs& a, std::size_t begin, std::size_t end);
+std::atomic<bool> g_baseline_only{false};
+}  // namespace
+
+namespace detail {
+void set_simd_baseline_only(bool on) {
+  g_baseline_only.store(on);
+}
+BlendChunkFn blend_chunk_kernel() {
+#if defined(__SSE2__)
+  // The AVX2 kernel where it is built and the CPU (and OS) support it, unless
+  // CSCULPT_SIMD=sse2 asks for the baseline; both give the same bits.
+  static const BlendChunkFn avx2 = []() -> BlendChunkFn {
+    const BlendChunkFn f = blend_chunk_avx2();
+#if defined(__x86_64__) || defined(__i386__)
+    if (f == nullptr || !__builtin_cpu_supports("avx2")) return nullptr;
+#else
+    if (f == nullptr) return nullptr;
+#endif
+    const char* env = std::getenv("CSCULPT_SIMD");
+    if (env != nullptr && std::string_view(env) == "sse2") return nullptr;
+    return f;
+  }();
+  if (avx2 != nullptr && !g_baseline_only.load()) return avx2;
+  return &blend_chunk_sse2;
+#else
+  return nullptr;
+#endif
+}
+}  // namespace detail
+
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -440,8 +476,13 @@ void decompose(const ParentLinks& links, std::size_t level_count,
 ///    symmetric and continuous. With s = 1 everywhere it is the paper's operator.
 enum class NodeBlend { magnitude, intent };
 
-/// Largest number of diffs merged at once (the per-node scratch lives on the stack).
-constexpr std::size_t kMaxDiffs = 64;
+using detail::kMaxDiffs;
+
+#if defined(__SSE2__)
+void blend_chunk_sse2(const detail::BlendLevelArgs& a, std::size_t begin, std::size_t end) {
+  detail::blend_chunk_dq_intent<detail::IsaSse2>(a, begin, end);
+}
+#endif
 
 template <class Ops>
 typename Ops::Reg blend_residuals(NodeBlend rule, const typename Ops::Reg* r, const float* m,
@@ -473,135 +514,6 @@ typename Ops::Reg blend_residuals(NodeBlend rule, const typename Ops::Reg* r, co
   return Ops::compose_offsets(acc);
 }
 
-#if defined(__SSE2__)
-/// The intent blend of dual quaternions (DqOps, NodeBlend::intent) for the nodes
-/// list[begin, end) of one level, four nodes at a time in structure-of-arrays registers
-/// (dq_soa.h): the parent sums are gathered per node as before, the rest of the arithmetic
-/// runs one node per lane, lane by lane the scalar code's operations, so bit-identical.
-inline void blend_chunk_dq_intent(const std::uint32_t* list, std::size_t begin, std::size_t end,
-                                  const ParentLinks::Level& fl, bool has_parents,
-                                  const LevelView<DualQuat>* here,
-                                  const LevelView<DualQuat>* coarse, std::size_t n_users,
-                                  DualQuat* out_values) {
-  using namespace detail;
-  const __m128 zero = _mm_setzero_ps();
-  DQv acc[kMaxDiffs + 1][4];
-  DQv q[kMaxDiffs][4];
-  std::uint32_t any_bits[kMaxDiffs + 1];   // lanes with a parent that differs from the identity
-  std::uint32_t here_bits[kMaxDiffs + 1];  // lanes whose node differs from the identity
-  DQ4 res[kMaxDiffs];
-  __m128 mag[kMaxDiffs];
-  constexpr std::size_t kAhead = 8;  // nodes: two groups
-  for (std::size_t g = begin; g < end; g += 4) {
-    const std::size_t lanes = std::min<std::size_t>(4, end - g);
-    for (std::size_t a = g + kAhead; a < std::min(end, g + kAhead + 4); ++a) {
-      const std::uint32_t next = list[a];
-      for (std::size_t j = 0; j < n_users; ++j) prefetch(&here[j].values[next]);
-    }
-    float weight_total[4];
-    for (std::size_t j = 0; j <= n_users; ++j) any_bits[j] = here_bits[j] = 0;
-    for (std::size_t lane = 0; lane < 4; ++lane) {
-      // lanes past the end repeat the first node; their results are not stored
-      const std::uint32_t c = list[g + (lane < lanes ? lane : 0)];
-      for (std::size_t j = 0; j <= n_users; ++j) acc[j][lane] = dq_zero();
-      float wt = 0;
-      if (has_parents) {
-        const ParentLinks::Level::Row links_of_c = fl.row(c);
-        for (std::uint32_t k = 0; k < links_of_c.count; ++k) {
-          const std::uint32_t p = links_of_c.parents[k];
-          const float w = links_of_c.weights[k];
-          wt += w;
-          for (std::size_t j = 0; j <= n_users; ++j) {
-            if (coarse[j].has(p)) {
-              dq_add_scaled_offset(acc[j][lane], w, dq_load(coarse[j].values[p]));
-              any_bits[j] |= 1u << lane;
-            }
-          }
-        }
-      }
-      weight_total[lane] = wt;
-      for (std::size_t j = 0; j < n_users; ++j) {
-        if (here[j].has(c)) {
-          q[j][lane] = dq_load(here[j].values[c]);
-          here_bits[j] |= 1u << lane;
-        } else {
-          q[j][lane] = dq_identity();
-        }
-      }
-    }
-    const __m128 wt4 = _mm_loadu_ps(weight_total);
-    auto mask_of = [](std::uint32_t bits) {
-      return _mm_castsi128_ps(_mm_set_epi32(bits & 8 ? -1 : 0, bits & 4 ? -1 : 0, bits & 2 ? -1 : 0,
-                                            bits & 1 ? -1 : 0));
-    };
-    // finish_average: real w += total weight, normalised, canonical
-    auto parent_blend = [&](std::size_t j) {
-      DQ4 a = dq4_from(acc[j][0], acc[j][1], acc[j][2], acc[j][3]);
-      a.c[0] = _mm_add_ps(a.c[0], wt4);
-      return dq4_canonical(dq4_normalized(a));
-    };
-    int active_bits[kMaxDiffs];
-    for (std::size_t j = 0; j < n_users; ++j) {
-      if ((any_bits[j] | here_bits[j]) == 0) {  // the identity in every lane: magnitude 0
-        res[j] = dq4_identity();
-        mag[j] = zero;
-        active_bits[j] = 0;
-        continue;
-      }
-      const DQ4 qj = dq4_from(q[j][0], q[j][1], q[j][2], q[j][3]);
-      if (any_bits[j] != 0) {
-        const DQ4 r = dq4_canonical(dq4_mul(dq4_inverse(parent_blend(j)), qj));
-        res[j] = dq4_select(mask_of(any_bits[j]), r, qj);
-      } else {
-        res[j] = qj;
-      }
-      // residuals and stored values are canonical already
-      mag[j] = dq4_magnitude_of_canonical(res[j]);
-      active_bits[j] = _mm_movemask_ps(_mm_cmpgt_ps(mag[j], zero));
-    }
-    // intent: acc = sum_j c_j (r_j - 1), c_j = m_j / sum_k s_jk m_k over active j, k
-    DQ4 sum;
-    for (__m128& x : sum.c) x = zero;
-    __m128 magnitude_sum = zero;
-    for (std::size_t j = 0; j < n_users; ++j) {
-      if (active_bits[j] == 0) continue;
-      const __m128 active_j = _mm_cmpgt_ps(mag[j], zero);
-      __m128 same = zero;
-      for (std::size_t k = 0; k < n_users; ++k) {
-        if (active_bits[k] == 0) continue;  // it would add + 0 in every lane
-        const __m128 active_k = _mm_cmpgt_ps(mag[k], zero);
-        __m128 term;
-        if (k == j) {
-          term = mag[k];  // closeness 1: s m_k = m_k exactly
-        } else {
-          const __m128 larger = _mm_max_ps(mag[k], mag[j]);  // std::max(m_j, m_k)
-          const __m128 closeness = _mm_max_ps(               // std::max(0.f, x)
-              _mm_sub_ps(_mm_set1_ps(1.f), _mm_div_ps(dq4_distance(res[j], res[k]), larger)), zero);
-          term = _mm_mul_ps(_mm_mul_ps(closeness, closeness), mag[k]);
-        }
-        same = _mm_add_ps(same, _mm_and_ps(active_k, term));  // + 0 where inactive: exact
-      }
-      const __m128 w = _mm_div_ps(mag[j], same);
-      sum.c[0] = _mm_add_ps(
-          sum.c[0], _mm_and_ps(active_j, _mm_mul_ps(w, _mm_sub_ps(res[j].c[0], _mm_set1_ps(1.f)))));
-#pragma GCC unroll 8
-      for (int i = 1; i < 8; ++i)
-        sum.c[i] = _mm_add_ps(sum.c[i], _mm_and_ps(active_j, _mm_mul_ps(w, res[j].c[i])));
-      magnitude_sum = _mm_add_ps(magnitude_sum, _mm_and_ps(active_j, mag[j]));
-    }
-    sum.c[0] = _mm_add_ps(sum.c[0], _mm_set1_ps(1.f));
-    DQ4 blended = dq4_select(_mm_cmpgt_ps(magnitude_sum, zero), dq4_canonical(dq4_normalized(sum)),
-                             dq4_identity());
-    if (any_bits[n_users] != 0)
-      blended = dq4_select(mask_of(any_bits[n_users]),
-                           dq4_canonical(dq4_mul(parent_blend(n_users), blended)), blended);
-    DQv out[4];
-    dq4_to(blended, out);
-    for (std::size_t lane = 0; lane < lanes; ++lane)
-      dq_store(out_values[list[g + lane]], out[lane]);
-  }
-}
-#endif
 
 /// Marks the nodes the result needs above level 0, a superset of the ancestors of the
 /// vertices listed on merged.levels[0]: the union of the diffs' own nodes there (each
@@ -656,9 +568,27 @@ void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
 #if defined(__SSE2__)
     if constexpr (std::is_same_v<Ops, DqOps>) {
       if (rule == NodeBlend::intent) {
+        detail::BlendLevelArgs args;
+        args.list = out_list;
+        args.parent = fl.parent;
+        args.weight = fl.weight;
+        args.parent_count = fl.parent_count;
+        args.stride = fl.stride;
+        args.tree = fl.tree;
+        args.has_parents = has_parents;
+        args.users = n_users;
+        for (std::size_t j = 0; j < n_users; ++j) {
+          args.here_values[j] = here[j].values;
+          args.here_bits[j] = here[j].bits;
+        }
+        for (std::size_t j = 0; has_parents && j <= n_users; ++j) {
+          args.coarse_values[j] = coarse[j].values;
+          args.coarse_bits[j] = coarse[j].bits;
+        }
+        args.out_values = out_values;
+        const detail::BlendChunkFn chunk = detail::blend_chunk_kernel();
         pool.for_chunks(out.list.size(), 512, [&](std::size_t begin, std::size_t end) {
-          blend_chunk_dq_intent(out_list, begin, end, fl, has_parents, here, coarse, n_users,
-                                out_values);
+          chunk(args, begin, end);
         });
         continue;
       }
