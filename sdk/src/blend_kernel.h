@@ -1,7 +1,7 @@
 // Internal: the merge's hottest loop, the intent blend of dual quaternions at the nodes of
 // one hierarchy level (merge.cpp: blend_and_reconstruct with DqOps and NodeBlend::intent),
 // written once over the register width and compiled twice: SSE2 (4 nodes per register, in
-// merge.cpp) and AVX2 (8 nodes, in blend_avx2.cpp, used when the CPU has it). Every lane
+// simd_dispatch.cpp) and AVX2 (8 nodes, in blend_avx2.cpp, used when the CPU has it). Every lane
 // performs the scalar code's IEEE operations in the same order, so both give bit-identical
 // merges and peers with different CPUs agree (tests/unit/test_simd_dispatch.cpp).
 #pragma once
@@ -42,7 +42,7 @@ using BlendChunkFn = void (*)(const BlendLevelArgs&, std::size_t begin, std::siz
 
 /// The AVX2 kernel (blend_avx2.cpp); null where it is not built.
 BlendChunkFn blend_chunk_avx2();
-/// The kernel merges use (merge.cpp): AVX2 where built and supported, unless the
+/// The kernel merges use (simd_dispatch.cpp): AVX2 where built and supported, unless the
 /// environment says CSCULPT_SIMD=sse2 or set_simd_baseline_only(true) was called.
 BlendChunkFn blend_chunk_kernel();
 /// For tests: force the SSE2 kernel (true) or return to the automatic choice (false).

@@ -67,6 +67,7 @@ struct Lanes<__m128> {
   static __m128 set1(float x) { return _mm_set1_ps(x); }
   static __m128 zero() { return _mm_setzero_ps(); }
   static __m128 load(const float* p) { return _mm_loadu_ps(p); }
+  static void store(float* p, __m128 v) { _mm_storeu_ps(p, v); }
   /// A mask with the lanes of `bits` set.
   static __m128 mask(unsigned bits) {
     return _mm_castsi128_ps(_mm_set_epi32(bits & 8 ? -1 : 0, bits & 4 ? -1 : 0, bits & 2 ? -1 : 0,
@@ -80,6 +81,7 @@ struct Lanes<__m256> {
   static __m256 set1(float x) { return _mm256_set1_ps(x); }
   static __m256 zero() { return _mm256_setzero_ps(); }
   static __m256 load(const float* p) { return _mm256_loadu_ps(p); }
+  static void store(float* p, __m256 v) { _mm256_storeu_ps(p, v); }
   static __m256 mask(unsigned bits) {
     const __m256i lane_bit = _mm256_set_epi32(128, 64, 32, 16, 8, 4, 2, 1);
     const __m256i hit =

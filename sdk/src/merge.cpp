@@ -8,9 +8,6 @@
 #include "csculpt/merge.h"
 
 #include <algorithm>
-#include <atomic>
-#include <cstdlib>
-#include <string_view>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -31,38 +28,6 @@
 #include "worker_pool.h"
 
 namespace csculpt {
-namespace {
-void blend_chunk_sse2(const detail::BlendLevelArgs& a, std::size_t begin, std::size_t end);
-std::atomic<bool> g_baseline_only{false};
-}  // namespace
-
-namespace detail {
-void set_simd_baseline_only(bool on) {
-  g_baseline_only.store(on);
-}
-BlendChunkFn blend_chunk_kernel() {
-#if defined(__SSE2__)
-  // The AVX2 kernel where it is built and the CPU (and OS) support it, unless
-  // CSCULPT_SIMD=sse2 asks for the baseline; both give the same bits.
-  static const BlendChunkFn avx2 = []() -> BlendChunkFn {
-    const BlendChunkFn f = blend_chunk_avx2();
-#if defined(__x86_64__) || defined(__i386__)
-    if (f == nullptr || !__builtin_cpu_supports("avx2")) return nullptr;
-#else
-    if (f == nullptr) return nullptr;
-#endif
-    const char* env = std::getenv("CSCULPT_SIMD");
-    if (env != nullptr && std::string_view(env) == "sse2") return nullptr;
-    return f;
-  }();
-  if (avx2 != nullptr && !g_baseline_only.load()) return avx2;
-  return &blend_chunk_sse2;
-#else
-  return nullptr;
-#endif
-}
-}  // namespace detail
-
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -477,12 +442,6 @@ void decompose(const ParentLinks& links, std::size_t level_count,
 enum class NodeBlend { magnitude, intent };
 
 using detail::kMaxDiffs;
-
-#if defined(__SSE2__)
-void blend_chunk_sse2(const detail::BlendLevelArgs& a, std::size_t begin, std::size_t end) {
-  detail::blend_chunk_dq_intent<detail::IsaSse2>(a, begin, end);
-}
-#endif
 
 template <class Ops>
 typename Ops::Reg blend_residuals(NodeBlend rule, const typename Ops::Reg* r, const float* m,

@@ -11,6 +11,7 @@
 #include "csculpt/hierarchy.h"
 #include "csculpt/isometry.h"
 #include "dq_simd.h"
+#include "face_rotation_lanes.h"
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -235,91 +236,11 @@ inline void face_rotation_kernel_x2(const Vec3f* const (&p)[2][6], Quat (&out)[2
 /// every other lane (thin, degenerate, large rotation, huge or tiny coordinates) is left to
 /// the double kernel. The same formulas as face_rotation_kernel, in float: deterministic
 /// (IEEE single operations in a fixed order on every SSE2 CPU), not bit-identical to it;
-/// each lane is bit-identical to face_rotation_kernel_f1.
+/// each lane is bit-identical to face_rotation_kernel_f1, at any width
+/// (face_rotation_lanes.h).
 inline void face_rotation_kernel_f4(const Vec3f* const (&p)[4][6], Quat (&out)[4],
                                     bool (&ok)[4]) {
-  struct F3 {
-    __m128 x, y, z;
-  };
-  auto load = [&](int i) -> F3 {
-    return {_mm_set_ps(p[3][i]->x, p[2][i]->x, p[1][i]->x, p[0][i]->x),
-            _mm_set_ps(p[3][i]->y, p[2][i]->y, p[1][i]->y, p[0][i]->y),
-            _mm_set_ps(p[3][i]->z, p[2][i]->z, p[1][i]->z, p[0][i]->z)};
-  };
-  auto mul = [](__m128 a, __m128 b) { return _mm_mul_ps(a, b); };
-  auto add = [](__m128 a, __m128 b) { return _mm_add_ps(a, b); };
-  auto sub = [](__m128 a, __m128 b) { return _mm_sub_ps(a, b); };
-  auto sub3 = [&](const F3& u, const F3& v) -> F3 {
-    return {sub(u.x, v.x), sub(u.y, v.y), sub(u.z, v.z)};
-  };
-  auto cross = [&](const F3& u, const F3& v) -> F3 {
-    return {sub(mul(u.y, v.z), mul(u.z, v.y)), sub(mul(u.z, v.x), mul(u.x, v.z)),
-            sub(mul(u.x, v.y), mul(u.y, v.x))};
-  };
-  auto dot3 = [&](const F3& u, const F3& v) {
-    return add(add(mul(u.x, v.x), mul(u.y, v.y)), mul(u.z, v.z));
-  };
-  auto scale = [&](const F3& u, __m128 s) -> F3 { return {mul(u.x, s), mul(u.y, s), mul(u.z, s)}; };
-  const F3 a0 = load(0), a1 = load(1), a2 = load(2), b0 = load(3), b1 = load(4), b2 = load(5);
-  const F3 e0a = sub3(a1, a0), e1a = sub3(a2, a0), e0b = sub3(b1, b0), e1b = sub3(b2, b0);
-  const F3 ca = cross(e0a, e1a), cb = cross(e0b, e1b);
-  const __m128 la2 = dot3(e0a, e0a), lb2 = dot3(e0b, e0b);
-  const __m128 da2 = dot3(ca, ca), db2 = dot3(cb, cb);
-  // sin^2 > 1e-2 both sides; |e0 x e1|^2 within [1e-24, 1e24] so that nothing below
-  // (products of up to two such squares) leaves the normal float range
-  const __m128 tol = _mm_set1_ps(1e-2f), lo = _mm_set1_ps(1e-24f), hi = _mm_set1_ps(1e24f);
-  __m128 good = _mm_and_ps(_mm_cmpgt_ps(da2, mul(mul(tol, la2), dot3(e1a, e1a))),
-                           _mm_cmpgt_ps(db2, mul(mul(tol, lb2), dot3(e1b, e1b))));
-  good = _mm_and_ps(good, _mm_and_ps(_mm_cmpgt_ps(da2, lo), _mm_cmplt_ps(da2, hi)));
-  good = _mm_and_ps(good, _mm_and_ps(_mm_cmpgt_ps(db2, lo), _mm_cmplt_ps(db2, hi)));
-  int mask = _mm_movemask_ps(good);
-  if (mask == 0) {
-    for (int f = 0; f < 4; ++f) ok[f] = false;
-    return;
-  }
-  const __m128 one = _mm_set1_ps(1.f);
-  const __m128 inv_la = _mm_div_ps(one, _mm_sqrt_ps(la2)), inv_lb = _mm_div_ps(one, _mm_sqrt_ps(lb2));
-  const __m128 area_a = _mm_sqrt_ps(da2), area_b = _mm_sqrt_ps(db2);
-  const F3 na = scale(ca, _mm_div_ps(one, area_a)), nb = scale(cb, _mm_div_ps(one, area_b));
-  const F3 xa = scale(e0a, inv_la), xb = scale(e0b, inv_lb);
-  const F3 ya = cross(na, xa), yb = cross(nb, xb);
-  // cs, sn as in the double kernel but divided by la2 lb2 first (same angle), so their
-  // squares stay in range: cs' = |ca| / la2 + |cb| / lb2 etc.
-  const __m128 inv_la2 = mul(inv_la, inv_la), inv_lb2 = mul(inv_lb, inv_lb);
-  const __m128 cs = add(mul(area_a, inv_la2), mul(area_b, inv_lb2));
-  const __m128 sn = sub(mul(dot3(e0a, e1a), inv_la2), mul(dot3(e0b, e1b), inv_lb2));
-  const __m128 inv_h = _mm_div_ps(one, _mm_sqrt_ps(add(mul(cs, cs), mul(sn, sn))));
-  const __m128 c = mul(cs, inv_h), s = mul(sn, inv_h);
-  const F3 xr{add(mul(c, xb.x), mul(s, yb.x)), add(mul(c, xb.y), mul(s, yb.y)),
-              add(mul(c, xb.z), mul(s, yb.z))};
-  const F3 yr{sub(mul(c, yb.x), mul(s, xb.x)), sub(mul(c, yb.y), mul(s, xb.y)),
-              sub(mul(c, yb.z), mul(s, xb.z))};
-  auto entry = [&](__m128 rx, __m128 ry, __m128 rn, __m128 ax, __m128 ay, __m128 an) {
-    return add(add(mul(rx, ax), mul(ry, ay)), mul(rn, an));
-  };
-  const __m128 m0 = entry(xr.x, yr.x, nb.x, xa.x, ya.x, na.x);
-  const __m128 m1 = entry(xr.x, yr.x, nb.x, xa.y, ya.y, na.y);
-  const __m128 m2 = entry(xr.x, yr.x, nb.x, xa.z, ya.z, na.z);
-  const __m128 m3 = entry(xr.y, yr.y, nb.y, xa.x, ya.x, na.x);
-  const __m128 m4 = entry(xr.y, yr.y, nb.y, xa.y, ya.y, na.y);
-  const __m128 m5 = entry(xr.y, yr.y, nb.y, xa.z, ya.z, na.z);
-  const __m128 m6 = entry(xr.z, yr.z, nb.z, xa.x, ya.x, na.x);
-  const __m128 m7 = entry(xr.z, yr.z, nb.z, xa.y, ya.y, na.y);
-  const __m128 m8 = entry(xr.z, yr.z, nb.z, xa.z, ya.z, na.z);
-  // Shepperd's first branch only: trace > 0 (w > 1/2)
-  const __m128 tr = add(add(m0, m4), m8);
-  mask &= _mm_movemask_ps(_mm_cmpgt_ps(tr, _mm_setzero_ps()));
-  for (int f = 0; f < 4; ++f) ok[f] = (mask >> f & 1) != 0;
-  if (mask == 0) return;
-  const __m128 sq = mul(_mm_sqrt_ps(add(tr, one)), _mm_set1_ps(2.f));
-  const __m128 inv = _mm_div_ps(one, sq);
-  __m128 w = mul(_mm_set1_ps(0.25f), sq), x = mul(sub(m7, m5), inv), y = mul(sub(m2, m6), inv),
-         z = mul(sub(m3, m1), inv);
-  _MM_TRANSPOSE4_PS(w, x, y, z);  // now one face per register: (w x y z)
-  _mm_storeu_ps(&out[0].w, w);
-  _mm_storeu_ps(&out[1].w, x);
-  _mm_storeu_ps(&out[2].w, y);
-  _mm_storeu_ps(&out[3].w, z);
+  face_rotation_kernel_lanes<__m128>(p, out, ok);
 }
 #endif
 
@@ -401,34 +322,24 @@ void compute_vertex_isometries(const Topology& topology, std::span<const Vec3f> 
   scratch.face_seen.clear(scratch.faces);
   scratch.vertex_seen.clear(touched);
   // 2. their rotations: independent, so the divisions and roots of successive faces overlap.
-  // Well-conditioned faces in single precision four at a time, the rest (listed in `redo`,
-  // in increasing order) in double.
-  scratch.face_offset.resize(scratch.faces.size());
+  // Well-conditioned faces in single precision, 4 or 8 per register (face_rotation_lanes.h),
+  // the rest (listed in `redo`, in increasing order) in double.
+  const std::size_t face_count = scratch.faces.size();
+  scratch.face_offset.resize(face_count);
   auto& redo = scratch.redo;
-  redo.clear();
+  redo.resize(face_count);
   std::size_t first_scalar = 0;
 #if defined(__SSE2__)
-  std::size_t k4 = 0;
-  for (; k4 + 4 <= scratch.faces.size(); k4 += 4) {
-    const Vec3f* p[4][6];
-    for (int f = 0; f < 4; ++f) {
-      const Triangle& t = topology.triangles[scratch.faces[k4 + f]];
-      for (int i = 0; i < 3; ++i) {
-        p[f][i] = &base[t[i]];
-        p[f][3 + i] = &scratch.edited[t[i]];
-      }
-    }
-    Quat q[4];
-    bool ok[4];
-    face_rotation_kernel_f4(p, q, ok);
-    for (int f = 0; f < 4; ++f) {
-      if (ok[f])
-        scratch.face_offset[k4 + f] = Quat{q[f].w - 1.f, q[f].x, q[f].y, q[f].z};
-      else
-        redo.push_back(static_cast<std::uint32_t>(k4 + f));
-    }
-  }
-  for (; k4 < scratch.faces.size(); ++k4) redo.push_back(static_cast<std::uint32_t>(k4));
+  static_assert(sizeof(Triangle) == 3 * sizeof(std::uint32_t));
+  FaceRotationArgs args;
+  args.triangles = topology.triangles.empty() ? nullptr : topology.triangles.front().data();
+  args.base = base.data();
+  args.edited = scratch.edited.data();
+  args.faces = scratch.faces.data();
+  args.count = face_count;
+  args.offsets = scratch.face_offset.data();
+  args.redo = redo.data();
+  redo.resize(face_rotations_kernel()(args));
   for (; first_scalar + 2 <= redo.size(); first_scalar += 2) {
     const Vec3f* p[2][6];
     for (int f = 0; f < 2; ++f) {
@@ -446,15 +357,17 @@ void compute_vertex_isometries(const Topology& topology, std::span<const Vec3f> 
           ok[f] ? Quat{q[f].w - 1.f, q[f].x, q[f].y, q[f].z} : Quat{0, 0, 0, 0};
   }
 #else
-  for (std::size_t k = 0; k < scratch.faces.size(); ++k) {
+  std::size_t declined = 0;
+  for (std::size_t k = 0; k < face_count; ++k) {
     const Triangle& t = topology.triangles[scratch.faces[k]];
     Quat q;
     if (face_rotation_kernel_f1(base[t[0]], base[t[1]], base[t[2]], scratch.edited[t[0]],
                                 scratch.edited[t[1]], scratch.edited[t[2]], q))
       scratch.face_offset[k] = Quat{q.w - 1.f, q.x, q.y, q.z};
     else
-      redo.push_back(static_cast<std::uint32_t>(k));
+      redo[declined++] = static_cast<std::uint32_t>(k);
   }
+  redo.resize(declined);
 #endif
   for (std::size_t r = first_scalar; r < redo.size(); ++r) {
     const std::uint32_t k = redo[r];

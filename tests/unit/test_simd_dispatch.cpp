@@ -6,12 +6,16 @@
 // stay identical too).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <string>
 #include <vector>
 
 #include "blend_kernel.h"
+#include "csculpt/random.h"
+#include "face_rotation_lanes.h"
 #include "csculpt/diff.h"
 #include "csculpt/generate.h"
 #include "csculpt/hierarchy.h"
@@ -89,6 +93,60 @@ TEST(SimdDispatch, Avx2AndSse2KernelsMergeToTheSameBits) {
   }
   EXPECT_GE(compared, 3u * 8u);
   EXPECT_GT(moved, 0u);  // the merges did move vertices: the comparison is not vacuous
+}
+
+// The face-rotation kernel directly: every count from 1 to 40 (so every tail length of
+// both widths), random faces with rotations small and large and some degenerate ones; the
+// AVX2 build must compute the same faces to the same bits and decline the same ones.
+TEST(SimdDispatch, FaceRotationsAgreeAtEveryCountAndTail) {
+  if (detail::face_rotations_avx2() == nullptr)
+    GTEST_SKIP() << "the AVX2 kernels are not built for this target";
+  if (!__builtin_cpu_supports("avx2")) GTEST_SKIP() << "this CPU lacks AVX2";
+  SplitMix64 rng;
+  rng.state = 20261124;
+  std::vector<Vec3f> base, edited;
+  std::vector<std::uint32_t> triangles, faces;
+  for (std::uint32_t f = 0; f < 40; ++f) {
+    const float angle = static_cast<float>(f % 5 == 0 ? rng.range(1.0, 3.0) : rng.range(0, 0.3));
+    const float c = std::cos(angle), s = std::sin(angle);
+    for (int i = 0; i < 3; ++i) {
+      const Vec3f p{static_cast<float>(rng.range(-1, 1)), static_cast<float>(rng.range(-1, 1)),
+                    static_cast<float>(rng.range(-1, 1))};
+      base.push_back(p);
+      edited.push_back({c * p.x - s * p.y + 0.01f * static_cast<float>(rng.range(-1, 1)),
+                        s * p.x + c * p.y, p.z + 0.5f});
+      triangles.push_back(3 * f + static_cast<std::uint32_t>(i));
+    }
+    if (f % 7 == 3) base[3 * f + 2] = base[3 * f + 1];  // degenerate before
+    faces.push_back(39 - f);                             // listed out of order
+  }
+  for (std::size_t count = 1; count <= faces.size(); ++count) {
+    std::vector<Quat> narrow(count), wide(count);
+    std::vector<std::uint32_t> redo_narrow(count), redo_wide(count);
+    detail::FaceRotationArgs a;
+    a.triangles = triangles.data();
+    a.base = base.data();
+    a.edited = edited.data();
+    a.faces = faces.data();
+    a.count = count;
+    a.offsets = narrow.data();
+    a.redo = redo_narrow.data();
+    detail::set_simd_baseline_only(true);
+    const std::size_t n_narrow = detail::face_rotations_kernel()(a);
+    detail::set_simd_baseline_only(false);
+    a.offsets = wide.data();
+    a.redo = redo_wide.data();
+    const std::size_t n_wide = detail::face_rotations_avx2()(a);
+    ASSERT_EQ(n_narrow, n_wide) << count;
+    ASSERT_LT(n_narrow, count) << "nothing computed in single precision: vacuous";
+    redo_narrow.resize(n_narrow);
+    redo_wide.resize(n_wide);
+    ASSERT_EQ(redo_narrow, redo_wide) << count;
+    for (std::size_t k = 0; k < count; ++k) {
+      if (std::find(redo_narrow.begin(), redo_narrow.end(), k) != redo_narrow.end()) continue;
+      ASSERT_EQ(std::memcmp(&narrow[k], &wide[k], sizeof(Quat)), 0) << count << " face " << k;
+    }
+  }
 }
 
 }  // namespace
