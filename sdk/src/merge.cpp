@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstring>
 #include <exception>
+#include <functional>
 #include <numeric>
 #include <string>
 #include <thread>
@@ -498,11 +499,17 @@ void mark_coarse_union(std::span<const SparsePyramid<Value>> users, std::size_t 
 /// Residuals of every diff at each needed node, blended per node, recomposed from the
 /// coarsest level down (paper §3.1 "Final Merged Mesh"). Fills merged.levels[0] for the
 /// nodes listed there, and the coarser levels for the nodes mark_coarse_union() listed.
+/// Nodes per parallel chunk of the blend.
+constexpr std::size_t kBlendGrain = 512;
+
+/// `level0_done(begin, end)`, when given, runs on each chunk of level 0's list right after
+/// the chunk is blended, while its values are still in cache.
 template <class Ops>
-void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
-                           std::span<SparsePyramid<typename Ops::Value>> users,
-                           SparsePyramid<typename Ops::Value>& merged, NodeBlend rule,
-                           detail::WorkerPool& pool) {
+void blend_and_reconstruct(
+    const ParentLinks& links, std::size_t level_count,
+    std::span<SparsePyramid<typename Ops::Value>> users,
+    SparsePyramid<typename Ops::Value>& merged, NodeBlend rule, detail::WorkerPool& pool,
+    const std::function<void(std::size_t, std::size_t)>* level0_done = nullptr) {
   using Value = typename Ops::Value;
   using Reg = typename Ops::Reg;
   using View = LevelView<Value>;
@@ -546,14 +553,15 @@ void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
         }
         args.out_values = out_values;
         const detail::BlendChunkFn chunk = detail::blend_chunk_kernel();
-        pool.for_chunks(out.list.size(), 512, [&](std::size_t begin, std::size_t end) {
+        pool.for_chunks(out.list.size(), kBlendGrain, [&](std::size_t begin, std::size_t end) {
           chunk(args, begin, end);
+          if (level == 0 && level0_done != nullptr) (*level0_done)(begin, end);
         });
         continue;
       }
     }
 #endif
-    pool.for_chunks(out.list.size(), 2048, [&](std::size_t begin, std::size_t end) {
+    pool.for_chunks(out.list.size(), kBlendGrain, [&](std::size_t begin, std::size_t end) {
       Reg residuals[kMaxDiffs];
       float magnitudes[kMaxDiffs];
       Reg parent_acc[kMaxDiffs + 1];  // the diffs' parent blends, then the merged one
@@ -597,6 +605,7 @@ void blend_and_reconstruct(const ParentLinks& links, std::size_t level_count,
                 ? Ops::compose(Ops::finish_average(parent_acc[n_users], weight_total), residual)
                 : residual);
       }
+      if (level == 0 && level0_done != nullptr) (*level0_done)(begin, end);
     });
   }
 }
@@ -866,21 +875,18 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
       timings_.isometry_ms += std::min(iso_ms, region_ms);
       timings_.decompose_ms += std::max(0.0, region_ms - iso_ms);
       t0 = Clock::now();
-      blend_and_reconstruct<DqOps>(links, level_count, std::span(ws.dq_users.data(), users),
-                                   ws.dq_merged, t.node_blend, ws.pool);
-      timings_.blend_ms += ms_since(t0);
-      count_work(ws.dq_users, users, ws.dq_merged, level_count, sizeof(DualQuat));
-      t0 = Clock::now();
+      // Moved positions and, per chunk, how many differ from the base, computed by the blend
+      // as soon as each chunk of level 0 is done; then each chunk lists its own at its offset
+      // (the prefix sum of the counts): the same order as one serial pass, every write
+      // disjoint.
       const auto& changed_union = ws.dq_merged.levels[0].list;  // increasing
-      // Moved positions and, per chunk, how many differ from the base, in parallel; then each
-      // chunk lists its own at its offset (the prefix sum of the counts): the same order as
-      // one serial pass, every write disjoint.
       const std::size_t n_changed = changed_union.size();
-      constexpr std::size_t kGrain = 4096;
+      constexpr std::size_t kGrain = kBlendGrain;
       const std::size_t chunks = (n_changed + kGrain - 1) / kGrain;
       if (ws.moved.size() < n_changed) ws.moved.resize(n_changed);
       if (ws.chunk_offset.size() < chunks + 1) ws.chunk_offset.resize(chunks + 1);
-      ws.pool.for_chunks(n_changed, kGrain, [&](std::size_t begin, std::size_t end) {
+      const std::function<void(std::size_t, std::size_t)> move_vertices = [&](std::size_t begin,
+                                                                               std::size_t end) {
         std::size_t kept = 0;
         for (std::size_t i = begin; i < end; ++i) {
           const std::uint32_t v = changed_union[i];
@@ -889,7 +895,12 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
           kept += !(ws.moved[i] == base.positions[v]);
         }
         ws.chunk_offset[begin / kGrain + 1] = kept;
-      });
+      };
+      blend_and_reconstruct<DqOps>(links, level_count, std::span(ws.dq_users.data(), users),
+                                   ws.dq_merged, t.node_blend, ws.pool, &move_vertices);
+      timings_.blend_ms += ms_since(t0);
+      count_work(ws.dq_users, users, ws.dq_merged, level_count, sizeof(DualQuat));
+      t0 = Clock::now();
       ws.chunk_offset[0] = 0;
       for (std::size_t c = 0; c < chunks; ++c) ws.chunk_offset[c + 1] += ws.chunk_offset[c];
       const std::size_t kept_total = ws.chunk_offset[chunks];
