@@ -411,8 +411,6 @@ void decompose(const ParentLinks& links, std::size_t level_count,
       if (at + kAhead < n_fine) {
         const std::uint32_t next = fine.list[at + kAhead];
         prefetch(&fine.values[next]);
-        const ParentLinks::Level::Row ahead = fl.row(next);
-        for (std::uint32_t k = 0; k < ahead.count; ++k) prefetch(&coarse.values[ahead.parents[k]]);
       }
       const std::uint32_t c = fine.list[at];
       const Reg q = Ops::load(fine.val(c));
