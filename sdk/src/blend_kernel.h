@@ -201,7 +201,8 @@ void blend_chunk_dq_intent(const BlendLevelArgs& a, std::size_t begin, std::size
       const V w = v_div(mag[j], same);
       sum.c[0] = v_add(sum.c[0], v_and(active_j, v_mul(w, v_sub(res[j].c[0], one))));
 #pragma GCC unroll 8
-      for (int i = 1; i < 8; ++i) sum.c[i] = v_add(sum.c[i], v_and(active_j, v_mul(w, res[j].c[i])));
+      for (int i = 1; i < 8; ++i)
+        sum.c[i] = v_add(sum.c[i], v_and(active_j, v_mul(w, res[j].c[i])));
       magnitude_sum = v_add(magnitude_sum, v_and(active_j, mag[j]));
     }
     sum.c[0] = v_add(sum.c[0], one);
@@ -212,7 +213,8 @@ void blend_chunk_dq_intent(const BlendLevelArgs& a, std::size_t begin, std::size
                            dqn_canonical(dqn_mul(parent_blend(n_users), blended)), blended);
     A out[N];
     dqn_to(blended, out);
-    for (std::size_t lane = 0; lane < lanes; ++lane) Isa::store(a.out_values[list[g + lane]], out[lane]);
+    for (std::size_t lane = 0; lane < lanes; ++lane)
+      Isa::store(a.out_values[list[g + lane]], out[lane]);
   }
 }
 

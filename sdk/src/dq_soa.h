@@ -27,36 +27,88 @@ CSCULPT_ISA_BEGIN
 
 // ---- lane-wise operations, one overload per register width ----
 
-inline __m128 v_add(__m128 a, __m128 b) { return _mm_add_ps(a, b); }
-inline __m128 v_sub(__m128 a, __m128 b) { return _mm_sub_ps(a, b); }
-inline __m128 v_mul(__m128 a, __m128 b) { return _mm_mul_ps(a, b); }
-inline __m128 v_div(__m128 a, __m128 b) { return _mm_div_ps(a, b); }
-inline __m128 v_sqrt(__m128 a) { return _mm_sqrt_ps(a); }
-inline __m128 v_max(__m128 a, __m128 b) { return _mm_max_ps(a, b); }
-inline __m128 v_and(__m128 a, __m128 b) { return _mm_and_ps(a, b); }
-inline __m128 v_andnot(__m128 a, __m128 b) { return _mm_andnot_ps(a, b); }
-inline __m128 v_or(__m128 a, __m128 b) { return _mm_or_ps(a, b); }
-inline __m128 v_xor(__m128 a, __m128 b) { return _mm_xor_ps(a, b); }
-inline __m128 v_gt(__m128 a, __m128 b) { return _mm_cmpgt_ps(a, b); }
-inline __m128 v_lt(__m128 a, __m128 b) { return _mm_cmplt_ps(a, b); }
-inline int v_bits(__m128 a) { return _mm_movemask_ps(a); }
+inline __m128 v_add(__m128 a, __m128 b) {
+  return _mm_add_ps(a, b);
+}
+inline __m128 v_sub(__m128 a, __m128 b) {
+  return _mm_sub_ps(a, b);
+}
+inline __m128 v_mul(__m128 a, __m128 b) {
+  return _mm_mul_ps(a, b);
+}
+inline __m128 v_div(__m128 a, __m128 b) {
+  return _mm_div_ps(a, b);
+}
+inline __m128 v_sqrt(__m128 a) {
+  return _mm_sqrt_ps(a);
+}
+inline __m128 v_max(__m128 a, __m128 b) {
+  return _mm_max_ps(a, b);
+}
+inline __m128 v_and(__m128 a, __m128 b) {
+  return _mm_and_ps(a, b);
+}
+inline __m128 v_andnot(__m128 a, __m128 b) {
+  return _mm_andnot_ps(a, b);
+}
+inline __m128 v_or(__m128 a, __m128 b) {
+  return _mm_or_ps(a, b);
+}
+inline __m128 v_xor(__m128 a, __m128 b) {
+  return _mm_xor_ps(a, b);
+}
+inline __m128 v_gt(__m128 a, __m128 b) {
+  return _mm_cmpgt_ps(a, b);
+}
+inline __m128 v_lt(__m128 a, __m128 b) {
+  return _mm_cmplt_ps(a, b);
+}
+inline int v_bits(__m128 a) {
+  return _mm_movemask_ps(a);
+}
 
 #if defined(__AVX__)
 // _CMP_GT_OQ / _CMP_LT_OQ give the same lane results as SSE's cmpgt / cmplt (false on
 // NaN); only the floating-point exception flag differs, which nothing reads.
-inline __m256 v_add(__m256 a, __m256 b) { return _mm256_add_ps(a, b); }
-inline __m256 v_sub(__m256 a, __m256 b) { return _mm256_sub_ps(a, b); }
-inline __m256 v_mul(__m256 a, __m256 b) { return _mm256_mul_ps(a, b); }
-inline __m256 v_div(__m256 a, __m256 b) { return _mm256_div_ps(a, b); }
-inline __m256 v_sqrt(__m256 a) { return _mm256_sqrt_ps(a); }
-inline __m256 v_max(__m256 a, __m256 b) { return _mm256_max_ps(a, b); }
-inline __m256 v_and(__m256 a, __m256 b) { return _mm256_and_ps(a, b); }
-inline __m256 v_andnot(__m256 a, __m256 b) { return _mm256_andnot_ps(a, b); }
-inline __m256 v_or(__m256 a, __m256 b) { return _mm256_or_ps(a, b); }
-inline __m256 v_xor(__m256 a, __m256 b) { return _mm256_xor_ps(a, b); }
-inline __m256 v_gt(__m256 a, __m256 b) { return _mm256_cmp_ps(a, b, _CMP_GT_OQ); }
-inline __m256 v_lt(__m256 a, __m256 b) { return _mm256_cmp_ps(a, b, _CMP_LT_OQ); }
-inline int v_bits(__m256 a) { return _mm256_movemask_ps(a); }
+inline __m256 v_add(__m256 a, __m256 b) {
+  return _mm256_add_ps(a, b);
+}
+inline __m256 v_sub(__m256 a, __m256 b) {
+  return _mm256_sub_ps(a, b);
+}
+inline __m256 v_mul(__m256 a, __m256 b) {
+  return _mm256_mul_ps(a, b);
+}
+inline __m256 v_div(__m256 a, __m256 b) {
+  return _mm256_div_ps(a, b);
+}
+inline __m256 v_sqrt(__m256 a) {
+  return _mm256_sqrt_ps(a);
+}
+inline __m256 v_max(__m256 a, __m256 b) {
+  return _mm256_max_ps(a, b);
+}
+inline __m256 v_and(__m256 a, __m256 b) {
+  return _mm256_and_ps(a, b);
+}
+inline __m256 v_andnot(__m256 a, __m256 b) {
+  return _mm256_andnot_ps(a, b);
+}
+inline __m256 v_or(__m256 a, __m256 b) {
+  return _mm256_or_ps(a, b);
+}
+inline __m256 v_xor(__m256 a, __m256 b) {
+  return _mm256_xor_ps(a, b);
+}
+inline __m256 v_gt(__m256 a, __m256 b) {
+  return _mm256_cmp_ps(a, b, _CMP_GT_OQ);
+}
+inline __m256 v_lt(__m256 a, __m256 b) {
+  return _mm256_cmp_ps(a, b, _CMP_LT_OQ);
+}
+inline int v_bits(__m256 a) {
+  return _mm256_movemask_ps(a);
+}
 #endif
 
 template <class V>
@@ -70,8 +122,8 @@ struct Lanes<__m128> {
   static void store(float* p, __m128 v) { _mm_storeu_ps(p, v); }
   /// A mask with the lanes of `bits` set.
   static __m128 mask(unsigned bits) {
-    return _mm_castsi128_ps(_mm_set_epi32(bits & 8 ? -1 : 0, bits & 4 ? -1 : 0, bits & 2 ? -1 : 0,
-                                          bits & 1 ? -1 : 0));
+    return _mm_castsi128_ps(
+        _mm_set_epi32(bits & 8 ? -1 : 0, bits & 4 ? -1 : 0, bits & 2 ? -1 : 0, bits & 1 ? -1 : 0));
   }
 };
 #if defined(__AVX__)
@@ -84,8 +136,7 @@ struct Lanes<__m256> {
   static void store(float* p, __m256 v) { _mm256_storeu_ps(p, v); }
   static __m256 mask(unsigned bits) {
     const __m256i lane_bit = _mm256_set_epi32(128, 64, 32, 16, 8, 4, 2, 1);
-    const __m256i hit =
-        _mm256_and_si256(_mm256_set1_epi32(static_cast<int>(bits)), lane_bit);
+    const __m256i hit = _mm256_and_si256(_mm256_set1_epi32(static_cast<int>(bits)), lane_bit);
     return _mm256_castsi256_ps(_mm256_cmpeq_epi32(hit, lane_bit));
   }
 };
@@ -174,17 +225,17 @@ inline DQN<V> dqn_canonical(const DQN<V>& q) {
 /// normalized(): identity where the real part's squared norm is not > 1e-30.
 template <class V>
 inline DQN<V> dqn_normalized(const DQN<V>& v) {
-  const V n2 = v_add(v_add(v_add(v_mul(v.c[0], v.c[0]), v_mul(v.c[1], v.c[1])),
-                           v_mul(v.c[2], v.c[2])),
-                     v_mul(v.c[3], v.c[3]));
+  const V n2 =
+      v_add(v_add(v_add(v_mul(v.c[0], v.c[0]), v_mul(v.c[1], v.c[1])), v_mul(v.c[2], v.c[2])),
+            v_mul(v.c[3], v.c[3]));
   const V ok = v_gt(n2, Lanes<V>::set1(1e-30f));
   const V inv = v_div(Lanes<V>::set1(1.f), v_sqrt(n2));
   DQN<V> o;
 #pragma GCC unroll 8
   for (int i = 0; i < 8; ++i) o.c[i] = v_mul(v.c[i], inv);
-  const V rd = v_add(v_add(v_add(v_mul(o.c[0], o.c[4]), v_mul(o.c[1], o.c[5])),
-                           v_mul(o.c[2], o.c[6])),
-                     v_mul(o.c[3], o.c[7]));
+  const V rd =
+      v_add(v_add(v_add(v_mul(o.c[0], o.c[4]), v_mul(o.c[1], o.c[5])), v_mul(o.c[2], o.c[6])),
+            v_mul(o.c[3], o.c[7]));
 #pragma GCC unroll 8
   for (int i = 0; i < 4; ++i) o.c[4 + i] = v_sub(o.c[4 + i], v_mul(rd, o.c[i]));
   if (v_bits(ok) == kAllLanes<V>) return o;
@@ -239,15 +290,23 @@ inline void dqn_to(const DQ4& q, DQv (&out)[4]) {
 struct DQy {
   __m256 v;
 };
-inline DQy dqy_load(const DualQuat& q) { return {_mm256_loadu_ps(&q.real.w)}; }
-inline void dqy_store(DualQuat& q, const DQy& v) { _mm256_storeu_ps(&q.real.w, v.v); }
-inline DQy dqy_zero() { return {_mm256_setzero_ps()}; }
-inline DQy dqy_identity() { return {_mm256_set_ps(0, 0, 0, 0, 0, 0, 0, 1.f)}; }
+inline DQy dqy_load(const DualQuat& q) {
+  return {_mm256_loadu_ps(&q.real.w)};
+}
+inline void dqy_store(DualQuat& q, const DQy& v) {
+  _mm256_storeu_ps(&q.real.w, v.v);
+}
+inline DQy dqy_zero() {
+  return {_mm256_setzero_ps()};
+}
+inline DQy dqy_identity() {
+  return {_mm256_set_ps(0, 0, 0, 0, 0, 0, 0, 1.f)};
+}
 /// add_scaled_offset(): acc += w (q - 1); the other components subtract +0, which leaves
 /// every value (-0 included) as it is, so each lane is dq_add_scaled_offset's.
 inline void dqy_add_scaled_offset(DQy& acc, float w, const DQy& q) {
-  acc.v = _mm256_add_ps(
-      acc.v, _mm256_mul_ps(_mm256_set1_ps(w), _mm256_sub_ps(q.v, dqy_identity().v)));
+  acc.v =
+      _mm256_add_ps(acc.v, _mm256_mul_ps(_mm256_set1_ps(w), _mm256_sub_ps(q.v, dqy_identity().v)));
 }
 /// The 8 x 8 transpose (its own inverse): register i's lane k <-> register k's lane i.
 inline void transpose8(__m256 (&r)[8]) {

@@ -20,7 +20,7 @@ struct FaceRotationArgs {
   const Vec3f* edited = nullptr;             ///< positions after, per vertex
   const std::uint32_t* faces = nullptr;      ///< the faces to rotate
   std::size_t count = 0;
-  Quat* offsets = nullptr;     ///< out, per listed face: its rotation - 1 where computed
+  Quat* offsets = nullptr;        ///< out, per listed face: its rotation - 1 where computed
   std::uint32_t* redo = nullptr;  ///< out (room for `count`): positions left to the double kernel
 };
 
@@ -75,7 +75,9 @@ inline void face_rotation_kernel_lanes(const Vec3f* const (*p)[6], Quat* out, bo
   auto dot3 = [&](const F3& u, const F3& v) {
     return v_add(v_add(v_mul(u.x, v.x), v_mul(u.y, v.y)), v_mul(u.z, v.z));
   };
-  auto scale = [&](const F3& u, V s) -> F3 { return {v_mul(u.x, s), v_mul(u.y, s), v_mul(u.z, s)}; };
+  auto scale = [&](const F3& u, V s) -> F3 {
+    return {v_mul(u.x, s), v_mul(u.y, s), v_mul(u.z, s)};
+  };
   const F3 a0 = load(0), a1 = load(1), a2 = load(2), b0 = load(3), b1 = load(4), b2 = load(5);
   const F3 e0a = sub3(a1, a0), e1a = sub3(a2, a0), e0b = sub3(b1, b0), e1b = sub3(b2, b0);
   const F3 ca = cross(e0a, e1a), cb = cross(e0b, e1b);

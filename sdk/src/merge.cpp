@@ -3,8 +3,9 @@
 //
 // Everything is sparse: a diff touches a few percent of the vertices, so each level keeps
 // a list of the nodes that differ from the identity plus a bitmap over its nodes (cleared
-// word by word from the list at the next pass), and the merged result is computed only for the ancestors of vertices
-// some diff changed. Untouched vertices keep their exact base values (paper's identity).
+// word by word from the list at the next pass), and the merged result is computed only for the
+// ancestors of vertices some diff changed. Untouched vertices keep their exact base values (paper's
+// identity).
 #include "csculpt/merge.h"
 
 #include <algorithm>
@@ -19,13 +20,13 @@
 #include <thread>
 #include <type_traits>
 
+#include "aligned_allocator.h"
+#include "blend_kernel.h"
 #include "csculpt/dual_quat.h"
 #include "csculpt/error.h"
 #include "dq_simd.h"
-#include "blend_kernel.h"
 #include "dq_soa.h"
 #include "vertex_isometry_kernel.h"
-#include "aligned_allocator.h"
 #include "worker_pool.h"
 
 namespace csculpt {
@@ -472,7 +473,6 @@ typename Ops::Reg blend_residuals(NodeBlend rule, const typename Ops::Reg* r, co
   return Ops::compose_offsets(acc);
 }
 
-
 /// Marks the nodes the result needs above level 0, a superset of the ancestors of the
 /// vertices listed on merged.levels[0]: the union of the diffs' own nodes there (each
 /// diff's pyramid holds the ancestors of every vertex it changed, after decompose()). A
@@ -505,8 +505,8 @@ constexpr std::size_t kBlendGrain = 512;
 template <class Ops>
 void blend_and_reconstruct(
     const ParentLinks& links, std::size_t level_count,
-    std::span<SparsePyramid<typename Ops::Value>> users,
-    SparsePyramid<typename Ops::Value>& merged, NodeBlend rule, detail::WorkerPool& pool,
+    std::span<SparsePyramid<typename Ops::Value>> users, SparsePyramid<typename Ops::Value>& merged,
+    NodeBlend rule, detail::WorkerPool& pool,
     const std::function<void(std::size_t, std::size_t)>* level0_done = nullptr) {
   using Value = typename Ops::Value;
   using Reg = typename Ops::Reg;
@@ -838,8 +838,9 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
       ws.pool.run(users + 1, [&](std::size_t u) {
         if (u == users) {
           mark_union(
-              ws.dq_merged.levels[0], users,
-              [&](std::size_t j) -> const auto& { return diffs[order[j]]->positions.indices; });
+              ws.dq_merged.levels[0], users, [&](std::size_t j) -> const auto& {
+                return diffs[order[j]]->positions.indices;
+              });
           return;
         }
         const auto task_t0 = Clock::now();
@@ -864,8 +865,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
         iso_task_ms[u] = ms_since(task_t0);
         decompose<DqOps>(links, level_count, ws.dq_users[u]);
       });
-      mark_coarse_union<DualQuat>(std::span(ws.dq_users.data(), users), level_count,
-                                  ws.dq_merged);
+      mark_coarse_union<DualQuat>(std::span(ws.dq_users.data(), users), level_count, ws.dq_merged);
       // The region's time split: isometries = the longest diff's isometry part, the rest
       // (decomposition and its imbalance) to decompose.
       const double region_ms = ms_since(t0);
@@ -884,7 +884,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
       if (ws.moved.size() < n_changed) ws.moved.resize(n_changed);
       if (ws.chunk_offset.size() < chunks + 1) ws.chunk_offset.resize(chunks + 1);
       const std::function<void(std::size_t, std::size_t)> move_vertices = [&](std::size_t begin,
-                                                                               std::size_t end) {
+                                                                              std::size_t end) {
         std::size_t kept = 0;
         for (std::size_t i = begin; i < end; ++i) {
           const std::uint32_t v = changed_union[i];
@@ -941,9 +941,8 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
         }
         timings_.isometry_ms += ms_since(t0);
         t0 = Clock::now();
-        ws.pool.run(users, [&](std::size_t u) {
-          decompose<Ops>(links, level_count, ws.vec_users[u]);
-        });
+        ws.pool.run(users,
+                    [&](std::size_t u) { decompose<Ops>(links, level_count, ws.vec_users[u]); });
         timings_.decompose_ms += ms_since(t0);
         t0 = Clock::now();
         auto& out = ws.vec_merged;
@@ -1018,9 +1017,8 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
       mark_sorted_union(
           out.levels[0], users, [&](std::size_t u) -> const auto& { return *changed_lists[u]; },
           ws.sole);
-      ws.pool.run(users, [&](std::size_t u) {
-        decompose<Ops>(links, channel_levels, ws.vec_users[u]);
-      });
+      ws.pool.run(users,
+                  [&](std::size_t u) { decompose<Ops>(links, channel_levels, ws.vec_users[u]); });
       mark_coarse_union<Value>(std::span(ws.vec_users.data(), users), channel_levels, out);
       blend_and_reconstruct<Ops>(links, channel_levels, std::span(ws.vec_users.data(), users), out,
                                  channel_blend, ws.pool);

@@ -36,28 +36,32 @@ std::size_t face_rotations_sse2(const FaceRotationArgs& a) {
 }
 #endif
 
+/// The AVX2 build where it exists and may run, else the baseline (null without SSE2).
+template <class Fn>
+Fn choose(Fn avx2, Fn baseline) {
+  return avx2 != nullptr && avx2_usable() ? avx2 : baseline;
+}
+
 }  // namespace
 
 void set_simd_baseline_only(bool on) {
   g_baseline_only.store(on);
 }
 
+#if defined(__SSE2__)
 BlendChunkFn blend_chunk_kernel() {
-  if (avx2_usable() && blend_chunk_avx2() != nullptr) return blend_chunk_avx2();
-#if defined(__SSE2__)
-  return &blend_chunk_sse2;
-#else
-  return nullptr;
-#endif
+  return choose<BlendChunkFn>(blend_chunk_avx2(), &blend_chunk_sse2);
 }
-
 FaceRotationsFn face_rotations_kernel() {
-  if (avx2_usable() && face_rotations_avx2() != nullptr) return face_rotations_avx2();
-#if defined(__SSE2__)
-  return &face_rotations_sse2;
-#else
-  return nullptr;
-#endif
+  return choose<FaceRotationsFn>(face_rotations_avx2(), &face_rotations_sse2);
 }
+#else
+BlendChunkFn blend_chunk_kernel() {
+  return nullptr;
+}
+FaceRotationsFn face_rotations_kernel() {
+  return nullptr;
+}
+#endif
 
 }  // namespace csculpt::detail

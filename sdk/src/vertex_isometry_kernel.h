@@ -141,8 +141,7 @@ inline bool face_rotation_kernel_f1(const Vec3f& a0, const Vec3f& a1, const Vec3
 /// performs exactly the scalar kernel's IEEE operations in the same order (the degenerate
 /// tests become masks), so results are bit-identical to two scalar calls. Vertices are given
 /// as p[face][0..5] -> a0, a1, a2, b0, b1, b2 (read in place: no copy).
-inline void face_rotation_kernel_x2(const Vec3f* const (&p)[2][6], Quat (&out)[2],
-                                    bool (&ok)[2]) {
+inline void face_rotation_kernel_x2(const Vec3f* const (&p)[2][6], Quat (&out)[2], bool (&ok)[2]) {
   struct D3 {
     __m128d x, y, z;
   };
@@ -238,8 +237,7 @@ inline void face_rotation_kernel_x2(const Vec3f* const (&p)[2][6], Quat (&out)[2
 /// (IEEE single operations in a fixed order on every SSE2 CPU), not bit-identical to it;
 /// each lane is bit-identical to face_rotation_kernel_f1, at any width
 /// (face_rotation_lanes.h).
-inline void face_rotation_kernel_f4(const Vec3f* const (&p)[4][6], Quat (&out)[4],
-                                    bool (&ok)[4]) {
+inline void face_rotation_kernel_f4(const Vec3f* const (&p)[4][6], Quat (&out)[4], bool (&ok)[4]) {
   face_rotation_kernel_lanes<__m128>(p, out, ok);
 }
 #endif
@@ -268,8 +266,8 @@ struct BitSet {
 };
 
 struct VertexIsometryScratch {
-  BitSet face_seen;    ///< all clear between calls
-  BitSet vertex_seen;  ///< all clear between calls
+  BitSet face_seen;                  ///< all clear between calls
+  BitSet vertex_seen;                ///< all clear between calls
   std::vector<Quat> rotation_sum;    ///< sum of (q_face - 1) over changed faces
   std::vector<std::uint32_t> faces;  ///< faces around changed vertices, first-touch order
   std::vector<Quat> face_offset;     ///< per listed face: q_face - 1 (zero if degenerate)

@@ -5,8 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <numbers>
 
@@ -17,7 +17,9 @@ namespace csculpt {
 namespace {
 
 #if defined(__SSE2__)
-bool same_bits(const Quat& a, const Quat& b) { return std::memcmp(&a, &b, sizeof(Quat)) == 0; }
+bool same_bits(const Quat& a, const Quat& b) {
+  return std::memcmp(&a, &b, sizeof(Quat)) == 0;
+}
 
 /// The kernels read their points in place, through pointers.
 template <int N>
@@ -106,7 +108,8 @@ TEST(IsometryFaceRotationSimd, SinglePrecisionMatchesTheDoubleKernelWhereItAnswe
         for (double& x : v[i]) x = rng.range(-extent, extent);
       // squash the third vertex towards the line of the first two: thin triangles too
       const double squash = std::exp(rng.range(std::log(1e-6), 0.0));
-      for (int k = 0; k < 3; ++k) v[2][k] = 0.5 * (v[0][k] + v[1][k]) + squash * (v[2][k] - 0.5 * (v[0][k] + v[1][k]));
+      for (int k = 0; k < 3; ++k)
+        v[2][k] = 0.5 * (v[0][k] + v[1][k]) + squash * (v[2][k] - 0.5 * (v[0][k] + v[1][k]));
       sin_a[f] = squash;
       for (int i = 0; i < 3; ++i) {
         const double x = v[i][0], y = v[i][1], z = v[i][2];
@@ -138,15 +141,17 @@ TEST(IsometryFaceRotationSimd, SinglePrecisionMatchesTheDoubleKernelWhereItAnswe
       Quat ref;
       ASSERT_TRUE(
           detail::face_rotation_kernel(p[f][0], p[f][1], p[f][2], p[f][3], p[f][4], p[f][5], ref));
-      const double e = std::max({std::fabs(double(q[f].w) - ref.w), std::fabs(double(q[f].x) - ref.x),
-                                 std::fabs(double(q[f].y) - ref.y), std::fabs(double(q[f].z) - ref.z)});
+      const double e =
+          std::max({std::fabs(double(q[f].w) - ref.w), std::fabs(double(q[f].x) - ref.x),
+                    std::fabs(double(q[f].y) - ref.y), std::fabs(double(q[f].z) - ref.z)});
       worst = std::max(worst, e);
       ++answered;
       thin_answered += sin_a[f] < 0.1;
     }
   }
-  std::printf("single precision: %d answered (%d squashed below 0.1), %d declined, worst |dq| %.3g\n",
-              answered, thin_answered, declined, worst);
+  std::printf(
+      "single precision: %d answered (%d squashed below 0.1), %d declined, worst |dq| %.3g\n",
+      answered, thin_answered, declined, worst);
   EXPECT_LT(worst, 1e-5);
   EXPECT_GT(answered, 20000);
   EXPECT_GT(declined, 20000);

@@ -14,13 +14,13 @@
 #include <vector>
 
 #include "blend_kernel.h"
-#include "csculpt/random.h"
-#include "face_rotation_lanes.h"
 #include "csculpt/diff.h"
 #include "csculpt/generate.h"
 #include "csculpt/hierarchy.h"
 #include "csculpt/io.h"
 #include "csculpt/merge.h"
+#include "csculpt/random.h"
+#include "face_rotation_lanes.h"
 
 namespace csculpt {
 namespace {
@@ -118,7 +118,7 @@ TEST(SimdDispatch, FaceRotationsAgreeAtEveryCountAndTail) {
       triangles.push_back(3 * f + static_cast<std::uint32_t>(i));
     }
     if (f % 7 == 3) base[3 * f + 2] = base[3 * f + 1];  // degenerate before
-    faces.push_back(39 - f);                             // listed out of order
+    faces.push_back(39 - f);                            // listed out of order
   }
   for (std::size_t count = 1; count <= faces.size(); ++count) {
     std::vector<Quat> narrow(count), wide(count);
