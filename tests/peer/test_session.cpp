@@ -89,7 +89,13 @@ TEST(Invite, RoundTripsAndRejectsMalformedText) {
 
 TEST(Session, TwoPeersMergeOverlappingEditsAndConvergeBitIdentically) {
   const Mesh sphere = make_sphere(4000, /*materials=*/true);
-  Artist a{Session::create(sphere, fast_options(1)), sphere};
+  // The conflict count below is per merge window, so both strokes must reach the merger
+  // before its first merge: with a 30 ms window a slow run (TSan) could split them. The
+  // first merge comes one interval after the session starts, long after the join and the
+  // two submits.
+  SessionOptions slow_window = fast_options(1);
+  slow_window.sync = Millis{2000};
+  Artist a{Session::create(sphere, slow_window), sphere};
   Artist b{Session::join(a.session->invite(), fast_options(2)), {}};
   b.local = b.session->base();
   EXPECT_EQ(mesh_digest(b.local), mesh_digest(sphere));
