@@ -120,6 +120,9 @@ struct Lanes<__m128> {
   static __m128 zero() { return _mm_setzero_ps(); }
   static __m128 load(const float* p) { return _mm_loadu_ps(p); }
   static void store(float* p, __m128 v) { _mm_storeu_ps(p, v); }
+  /// From four values in registers (no round trip through memory, whose narrow stores a
+  /// wide load cannot forward from).
+  static __m128 set(const float (&x)[4]) { return _mm_set_ps(x[3], x[2], x[1], x[0]); }
   /// A mask with the lanes of `bits` set.
   static __m128 mask(unsigned bits) {
     return _mm_castsi128_ps(
@@ -134,6 +137,9 @@ struct Lanes<__m256> {
   static __m256 zero() { return _mm256_setzero_ps(); }
   static __m256 load(const float* p) { return _mm256_loadu_ps(p); }
   static void store(float* p, __m256 v) { _mm256_storeu_ps(p, v); }
+  static __m256 set(const float (&x)[8]) {
+    return _mm256_set_ps(x[7], x[6], x[5], x[4], x[3], x[2], x[1], x[0]);
+  }
   static __m256 mask(unsigned bits) {
     const __m256i lane_bit = _mm256_set_epi32(128, 64, 32, 16, 8, 4, 2, 1);
     const __m256i hit = _mm256_and_si256(_mm256_set1_epi32(static_cast<int>(bits)), lane_bit);

@@ -57,13 +57,13 @@ inline void face_rotation_kernel_lanes(const Vec3f* const (*p)[6], Quat* out, bo
     V x, y, z;
   };
   auto load = [&](int i) -> F3 {
-    alignas(32) float x[N], y[N], z[N];
+    float x[N], y[N], z[N];
     for (int f = 0; f < N; ++f) {
       x[f] = p[f][i]->x;
       y[f] = p[f][i]->y;
       z[f] = p[f][i]->z;
     }
-    return {L::load(x), L::load(y), L::load(z)};
+    return {L::set(x), L::set(y), L::set(z)};
   };
   auto sub3 = [&](const F3& u, const F3& v) -> F3 {
     return {v_sub(u.x, v.x), v_sub(u.y, v.y), v_sub(u.z, v.z)};
