@@ -15,6 +15,9 @@ void blend_chunk_avx2_impl(const BlendLevelArgs& a, std::size_t begin, std::size
 std::size_t face_rotations_avx2_impl(const FaceRotationArgs& a) {
   return face_rotations_lanes<__m256>(a);
 }
+void vertex_finish_avx2_impl(const VertexFinishArgs& a) {
+  vertex_finish_lanes<__m256>(a);
+}
 }  // namespace
 BlendChunkFn blend_chunk_avx2() {
   return &blend_chunk_avx2_impl;
@@ -22,11 +25,17 @@ BlendChunkFn blend_chunk_avx2() {
 FaceRotationsFn face_rotations_avx2() {
   return &face_rotations_avx2_impl;
 }
+VertexFinishFn vertex_finish_avx2() {
+  return &vertex_finish_avx2_impl;
+}
 #else
 BlendChunkFn blend_chunk_avx2() {
   return nullptr;
 }
 FaceRotationsFn face_rotations_avx2() {
+  return nullptr;
+}
+VertexFinishFn vertex_finish_avx2() {
   return nullptr;
 }
 #endif

@@ -34,6 +34,24 @@ FaceRotationsFn face_rotations_avx2();
 /// The build the merge uses: the AVX2 one where built and supported, as blend_chunk_kernel().
 FaceRotationsFn face_rotations_kernel();
 
+/// The last step of the per-vertex isometries, as plain arrays: for each listed vertex, its
+/// rotation (the normalised sum of its faces' rotations, unchanged faces counting as the
+/// identity) and the translation that lands it on its edited position, in the merge frame.
+struct VertexFinishArgs {
+  const std::uint32_t* vertices = nullptr;  ///< the touched vertices
+  std::size_t count = 0;
+  const std::uint32_t* face_offsets = nullptr;  ///< vertex_faces offsets: the degree
+  const Quat* rotation_sum = nullptr;           ///< per vertex: sum of (q_face - 1)
+  const Vec3f* base = nullptr;
+  const Vec3f* edited = nullptr;
+  Vec3f center{0, 0, 0};  ///< the frame: local = (p - center) * inv_scale
+  float inv_scale = 1;
+  DualQuat* out = nullptr;  ///< per listed vertex, in list order
+};
+using VertexFinishFn = void (*)(const VertexFinishArgs&);
+VertexFinishFn vertex_finish_avx2();
+VertexFinishFn vertex_finish_kernel();
+
 }  // namespace csculpt::detail
 
 #if defined(__SSE2__)
@@ -167,6 +185,84 @@ std::size_t face_rotations_lanes(const FaceRotationArgs& a) {
     }
   }
   return redo;
+}
+
+/// VertexFinishFn at width N, one vertex per lane, each lane the scalar sequence of
+/// compute_vertex_isometries (vertex_isometry_kernel.h) operation for operation: the
+/// products of q_mul (dq_simd.h) summed in its order, its sign flips as subtractions
+/// (x + (-y) is x - y in IEEE arithmetic), the zero real parts of the points kept as
+/// 0.5 * 0 so that signed zeros come out alike. The last group is padded with its first
+/// vertex, whose extra results are not kept.
+template <class V>
+void vertex_finish_lanes(const VertexFinishArgs& a) {
+  using L = Lanes<V>;
+  constexpr std::size_t N = static_cast<std::size_t>(L::kCount);
+  const V half = L::set1(0.5f), zero = L::zero(), one = L::set1(1.f);
+  const V cx = L::set1(a.center.x), cy = L::set1(a.center.y), cz = L::set1(a.center.z);
+  const V inv_scale = L::set1(a.inv_scale);
+  for (std::size_t k = 0; k < a.count; k += N) {
+    const std::size_t lanes = a.count - k < N ? a.count - k : N;
+    float sw[N], sx[N], sy[N], sz[N], deg[N], fx[N], fy[N], fz[N], tx[N], ty[N], tz[N];
+    for (std::size_t f = 0; f < N; ++f) {
+      const std::uint32_t u = a.vertices[k + (f < lanes ? f : 0)];
+      const Quat& q = a.rotation_sum[u];
+      sw[f] = q.w, sx[f] = q.x, sy[f] = q.y, sz[f] = q.z;
+      deg[f] = static_cast<float>(a.face_offsets[u + 1] - a.face_offsets[u]);
+      fx[f] = a.base[u].x, fy[f] = a.base[u].y, fz[f] = a.base[u].z;
+      tx[f] = a.edited[u].x, ty[f] = a.edited[u].y, tz[f] = a.edited[u].z;
+    }
+    // r = normalised (sum + degree), or the identity where its norm vanishes
+    V rw = v_add(L::set(sw), L::set(deg)), rx = L::set(sx), ry = L::set(sy), rz = L::set(sz);
+    const V n2 = v_add(v_add(v_add(v_mul(rw, rw), v_mul(rx, rx)), v_mul(ry, ry)), v_mul(rz, rz));
+    const V ok = v_gt(n2, L::set1(1e-30f));
+    const V inv = v_div(one, v_sqrt(n2));
+    rw = sel(ok, v_mul(inv, rw), one);
+    rx = sel(ok, v_mul(inv, rx), zero);
+    ry = sel(ok, v_mul(inv, ry), zero);
+    rz = sel(ok, v_mul(inv, rz), zero);
+    // the points in the frame, as quaternions (0, p / 2)
+    const V pa_w = v_mul(half, zero);
+    const V pa_x = v_mul(half, v_mul(v_sub(L::set(fx), cx), inv_scale));
+    const V pa_y = v_mul(half, v_mul(v_sub(L::set(fy), cy), inv_scale));
+    const V pa_z = v_mul(half, v_mul(v_sub(L::set(fz), cz), inv_scale));
+    const V pb_w = pa_w;
+    const V pb_x = v_mul(half, v_mul(v_sub(L::set(tx), cx), inv_scale));
+    const V pb_y = v_mul(half, v_mul(v_sub(L::set(ty), cy), inv_scale));
+    const V pb_z = v_mul(half, v_mul(v_sub(L::set(tz), cz), inv_scale));
+    // q_mul(a, b) of dq_simd.h, per component
+    auto mul_w = [](V aw, V ax, V ay, V az, V bw, V bx, V by, V bz) {
+      return v_sub(v_sub(v_sub(v_mul(aw, bw), v_mul(ax, bx)), v_mul(ay, by)), v_mul(az, bz));
+    };
+    auto mul_x = [](V aw, V ax, V ay, V az, V bw, V bx, V by, V bz) {
+      return v_sub(v_add(v_add(v_mul(aw, bx), v_mul(ax, bw)), v_mul(ay, bz)), v_mul(az, by));
+    };
+    auto mul_y = [](V aw, V ax, V ay, V az, V bw, V bx, V by, V bz) {
+      return v_add(v_add(v_sub(v_mul(aw, by), v_mul(ax, bz)), v_mul(ay, bw)), v_mul(az, bx));
+    };
+    auto mul_z = [](V aw, V ax, V ay, V az, V bw, V bx, V by, V bz) {
+      return v_add(v_sub(v_add(v_mul(aw, bz), v_mul(ax, by)), v_mul(ay, bx)), v_mul(az, bw));
+    };
+    // dual = pb r - r pa
+    V d[4] = {v_sub(mul_w(pb_w, pb_x, pb_y, pb_z, rw, rx, ry, rz),
+                    mul_w(rw, rx, ry, rz, pa_w, pa_x, pa_y, pa_z)),
+              v_sub(mul_x(pb_w, pb_x, pb_y, pb_z, rw, rx, ry, rz),
+                    mul_x(rw, rx, ry, rz, pa_w, pa_x, pa_y, pa_z)),
+              v_sub(mul_y(pb_w, pb_x, pb_y, pb_z, rw, rx, ry, rz),
+                    mul_y(rw, rx, ry, rz, pa_w, pa_x, pa_y, pa_z)),
+              v_sub(mul_z(pb_w, pb_x, pb_y, pb_z, rw, rx, ry, rz),
+                    mul_z(rw, rx, ry, rz, pa_w, pa_x, pa_y, pa_z))};
+    // canonical: both parts negated where the real w is negative
+    const V flip = v_and(v_lt(rw, zero), L::set1(-0.f));
+    alignas(32) float out[8][N];
+    L::store(out[0], v_xor(rw, flip));
+    L::store(out[1], v_xor(rx, flip));
+    L::store(out[2], v_xor(ry, flip));
+    L::store(out[3], v_xor(rz, flip));
+    for (int i = 0; i < 4; ++i) L::store(out[4 + i], v_xor(d[i], flip));
+    for (std::size_t f = 0; f < lanes; ++f)
+      a.out[k + f] = DualQuat{{out[0][f], out[1][f], out[2][f], out[3][f]},
+                              {out[4][f], out[5][f], out[6][f], out[7][f]}};
+  }
 }
 
 CSCULPT_ISA_END

@@ -34,6 +34,9 @@ void blend_chunk_sse2(const BlendLevelArgs& a, std::size_t begin, std::size_t en
 std::size_t face_rotations_sse2(const FaceRotationArgs& a) {
   return face_rotations_lanes<__m128>(a);
 }
+void vertex_finish_sse2(const VertexFinishArgs& a) {
+  vertex_finish_lanes<__m128>(a);
+}
 #endif
 
 /// The AVX2 build where it exists and may run, else the baseline (null without SSE2).
@@ -55,11 +58,17 @@ BlendChunkFn blend_chunk_kernel() {
 FaceRotationsFn face_rotations_kernel() {
   return choose<FaceRotationsFn>(face_rotations_avx2(), &face_rotations_sse2);
 }
+VertexFinishFn vertex_finish_kernel() {
+  return choose<VertexFinishFn>(vertex_finish_avx2(), &vertex_finish_sse2);
+}
 #else
 BlendChunkFn blend_chunk_kernel() {
   return nullptr;
 }
 FaceRotationsFn face_rotations_kernel() {
+  return nullptr;
+}
+VertexFinishFn vertex_finish_kernel() {
   return nullptr;
 }
 #endif

@@ -273,6 +273,7 @@ struct VertexIsometryScratch {
   std::vector<Quat> face_offset;     ///< per listed face: q_face - 1 (zero if degenerate)
   std::vector<std::uint32_t> redo;   ///< positions in `faces` left to the double kernel
   std::vector<Vec3f> edited;         ///< per touched vertex: its edited position
+  std::vector<DualQuat> finished;    ///< per position in `touched`: its isometry
 
   void resize(std::size_t vertex_count, std::size_t face_count) {
     face_seen.resize(face_count);
@@ -386,18 +387,21 @@ void compute_vertex_isometries(const Topology& topology, std::span<const Vec3f> 
       _mm_storeu_ps(&scratch.rotation_sum[u].w,
                     _mm_add_ps(_mm_loadu_ps(&scratch.rotation_sum[u].w), o));
   }
-  for (std::uint32_t u : touched) {
-    const float degree = static_cast<float>(vf.offsets[u + 1] - vf.offsets[u]);
-    __m128 r = _mm_add_ss(_mm_loadu_ps(&scratch.rotation_sum[u].w), _mm_set_ss(degree));
-    const float n2 = hsum_ordered(_mm_mul_ps(r, r));
-    r = n2 > 1e-30f ? _mm_mul_ps(_mm_set1_ps(1.f / std::sqrt(n2)), r) : _mm_set_ss(1.f);
-    // from_rotation_and_points: (r, pb r - r pa) with p = quat(0, 0.5 point)
-    const Vec3f from = frame.to_local(base[u]), to = frame.to_local(scratch.edited[u]);
-    const __m128 half = _mm_set1_ps(0.5f);
-    const __m128 pa = _mm_mul_ps(half, _mm_set_ps(from.z, from.y, from.x, 0.f));
-    const __m128 pb = _mm_mul_ps(half, _mm_set_ps(to.z, to.y, to.x, 0.f));
-    store(u, dq_value(dq_canonical({r, _mm_sub_ps(q_mul(pb, r), q_mul(r, pa))})));
-  }
+  // 4. per vertex: its rotation and the translation that lands it on its edited position,
+  // 4 or 8 vertices per register (face_rotation_lanes.h), each lane the scalar sequence below
+  VertexFinishArgs finish;
+  finish.vertices = touched.data();
+  finish.count = touched.size();
+  finish.face_offsets = vf.offsets.data();
+  finish.rotation_sum = scratch.rotation_sum.data();
+  finish.base = base.data();
+  finish.edited = scratch.edited.data();
+  finish.center = frame.center;
+  finish.inv_scale = frame.inv_scale;
+  scratch.finished.resize(touched.size());
+  finish.out = scratch.finished.data();
+  vertex_finish_kernel()(finish);
+  for (std::size_t i = 0; i < touched.size(); ++i) store(touched[i], scratch.finished[i]);
 #else
   for (std::size_t k = 0; k < scratch.faces.size(); ++k)
     for (std::uint32_t u : topology.triangles[scratch.faces[k]])
