@@ -406,26 +406,39 @@ void decompose(const ParentLinks& links, std::size_t level_count,
     SparseLevel<typename Ops::Value>& fine = pyramid.levels[i];
     SparseLevel<typename Ops::Value>& coarse = pyramid.levels[i + 1];
     const ParentLinks::Level fl = links.level(i);
+    // Raw pointers in locals: the SIMD stores below may alias anything in memory, so
+    // pointers read through the level objects would be reloaded on every update.
+    const std::uint32_t* const fine_list = fine.list.data();
     const std::size_t n_fine = fine.list.size();
+    const auto* const fine_values = fine.values.data();
+    auto* const coarse_values = coarse.values.data();
+    std::uint64_t* const coarse_bits = coarse.bits.data();
     constexpr std::size_t kAhead = 8;
     for (std::size_t at = 0; at < n_fine; ++at) {
-      if (at + kAhead < n_fine) {
-        const std::uint32_t next = fine.list[at + kAhead];
-        prefetch(&fine.values[next]);
-      }
-      const std::uint32_t c = fine.list[at];
-      const Reg q = Ops::load(fine.val(c));
+      if (at + kAhead < n_fine) prefetch(&fine_values[fine_list[at + kAhead]]);
+      const std::uint32_t c = fine_list[at];
+      const Reg q = Ops::load(fine_values[c]);
       const ParentLinks::Level::Row links_of_c = fl.row(c);
       for (std::uint32_t k = 0; k < links_of_c.count; ++k) {
         const std::uint32_t p = links_of_c.parents[k];
-        Reg acc = coarse.mark(p) ? Ops::zero() : Ops::load(coarse.val(p));
+        std::uint64_t& word = coarse_bits[p >> 6];
+        const std::uint64_t bit = std::uint64_t{1} << (p & 63);
+        Reg acc;
+        if ((word & bit) != 0) {
+          acc = Ops::load(coarse_values[p]);
+        } else {  // first touch: coarse.mark(p)
+          word |= bit;
+          coarse.list.push_back(p);
+          acc = Ops::zero();
+        }
         Ops::add_offset(acc, links_of_c.weights[k], q);
-        Ops::store(coarse.val(p), acc);
+        Ops::store(coarse_values[p], acc);
       }
     }
     const float* child_weight_sum = links.level(i + 1).child_weight_sum;
     for (std::uint32_t p : coarse.list)
-      Ops::store(coarse.val(p), Ops::finish_average(Ops::load(coarse.val(p)), child_weight_sum[p]));
+      Ops::store(coarse_values[p],
+                 Ops::finish_average(Ops::load(coarse_values[p]), child_weight_sum[p]));
   }
 }
 
