@@ -31,11 +31,6 @@ inline void dq_store(DualQuat& q, const DQv& v) {
   _mm_storeu_ps(&q.real.w, v.r);
   _mm_storeu_ps(&q.dual.w, v.d);
 }
-inline DualQuat dq_value(const DQv& v) {
-  DualQuat q;
-  dq_store(q, v);
-  return q;
-}
 inline DQv dq_zero() {
   return {_mm_setzero_ps(), _mm_setzero_ps()};
 }

@@ -237,7 +237,6 @@ struct SparseLevel {
     if (values.size() < n) values.resize(n);
     if (bits.size() < (n + 63) / 64) bits.resize((n + 63) / 64, 0);
   }
-  bool has(std::uint32_t node) const { return (bits[node >> 6] >> (node & 63) & 1) != 0; }
   Value& val(std::uint32_t node) { return values[node]; }
   const Value& val(std::uint32_t node) const { return values[node]; }
   /// Marks the node; returns true if it was new this pass.
