@@ -10,31 +10,9 @@
 #include <vector>
 
 #include "csculpt.h"
+#include "host_arrays.h"
 
 namespace {
-
-/// A host: its own arrays, described to the library by csc_vertex_arrays.
-struct Host {
-  std::vector<float> positions;
-  std::vector<std::vector<float>> channels;
-  std::vector<float*> channel_pointers;
-  csc_vertex_arrays arrays = CSC_VERTEX_ARRAYS_INIT;
-
-  explicit Host(const csc_mesh* mesh) {
-    const std::uint32_t n = csc_mesh_vertex_count(mesh);
-    positions.assign(csc_mesh_positions(mesh), csc_mesh_positions(mesh) + 3 * n);
-    for (std::uint32_t c = 0; c < csc_mesh_channel_count(mesh); ++c) {
-      csc_channel_view view = CSC_CHANNEL_VIEW_INIT;
-      EXPECT_EQ(csc_mesh_channel(mesh, c, &view), CSC_OK);
-      channels.emplace_back(view.values, view.values + std::size_t{n} * view.desc.width);
-    }
-    for (auto& c : channels) channel_pointers.push_back(c.data());
-    arrays.vertex_count = n;
-    arrays.positions = positions.data();
-    arrays.channel_count = static_cast<std::uint32_t>(channels.size());
-    arrays.channels = channel_pointers.data();
-  }
-};
 
 csc_mesh* grid(int n) {
   std::vector<float> p;
@@ -85,7 +63,9 @@ TEST(CapiSession, TwoHostsEditTheirArraysAndConverge) {
 
   csc_mesh* b_base = nullptr;
   ASSERT_EQ(csc_session_copy_base(&b_base, b), CSC_OK);
-  Host ha(mesh), hb(b_base);
+  HostArrays ha(mesh), hb(b_base);
+  // views of the hosts' arrays: edited in place below, never reallocated
+  csc_vertex_arrays va = ha.arrays(), vb = hb.arrays();
   ASSERT_EQ(ha.positions, hb.positions);
   // a lifts the left half, b paints the right half red
   for (std::size_t v = 0; v < ha.positions.size() / 3; ++v) {
@@ -93,11 +73,11 @@ TEST(CapiSession, TwoHostsEditTheirArraysAndConverge) {
     if (hb.positions[3 * v] > 0.6f) hb.channels[0][3 * v] = 1.f;  // albedo red
   }
   int32_t sent = 0;
-  ASSERT_EQ(csc_session_submit(a, &ha.arrays, 1, &sent), CSC_OK) << csc_last_error();
+  ASSERT_EQ(csc_session_submit(a, &va, 1, &sent), CSC_OK) << csc_last_error();
   EXPECT_EQ(sent, 1);
-  ASSERT_EQ(csc_session_submit(b, &hb.arrays, 1, &sent), CSC_OK);
+  ASSERT_EQ(csc_session_submit(b, &vb, 1, &sent), CSC_OK);
   EXPECT_EQ(sent, 1);
-  ASSERT_EQ(csc_session_submit(b, &hb.arrays, 0, &sent), CSC_OK);
+  ASSERT_EQ(csc_session_submit(b, &vb, 0, &sent), CSC_OK);
   EXPECT_EQ(sent, 0);  // nothing new
 
   bool joined_event = false, version_event = false;
@@ -120,8 +100,8 @@ TEST(CapiSession, TwoHostsEditTheirArraysAndConverge) {
       break;
     }
     std::uint32_t applied = 0;
-    ASSERT_EQ(csc_session_update(a, &ha.arrays, &applied), CSC_OK) << csc_last_error();
-    ASSERT_EQ(csc_session_update(b, &hb.arrays, &applied), CSC_OK) << csc_last_error();
+    ASSERT_EQ(csc_session_update(a, &va, &applied), CSC_OK) << csc_last_error();
+    ASSERT_EQ(csc_session_update(b, &vb, &applied), CSC_OK) << csc_last_error();
     csc_session_event e = CSC_SESSION_EVENT_INIT;
     int32_t has = 0;
     while (csc_session_poll(a, &e, &has) == CSC_OK && has) {
@@ -148,13 +128,13 @@ TEST(CapiSession, TwoHostsEditTheirArraysAndConverge) {
   }
   EXPECT_GT(lift, 0.02f);
   EXPECT_GT(red, 0.9f);
-  std::vector<float> rgb(3 * ha.arrays.vertex_count);
-  EXPECT_EQ(csc_session_attribution_colors(a, rgb.data(), ha.arrays.vertex_count), CSC_OK);
+  std::vector<float> rgb(3 * va.vertex_count);
+  EXPECT_EQ(csc_session_attribution_colors(a, rgb.data(), va.vertex_count), CSC_OK);
   EXPECT_NE(rgb.front(), rgb.back());  // left and right halves attributed to different peers
   EXPECT_EQ(csc_session_attribution_colors(a, rgb.data(), 3), CSC_ERROR_INVALID_ARGUMENT);
 
   EXPECT_EQ(csc_session_leave(b), CSC_OK);
-  EXPECT_EQ(csc_session_submit(b, &hb.arrays, 0, nullptr), CSC_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(csc_session_submit(b, &vb, 0, nullptr), CSC_ERROR_INVALID_ARGUMENT);
   csc_session_destroy(b);
   csc_session_destroy(a);
   csc_mesh_destroy(b_base);
@@ -197,12 +177,13 @@ TEST(CapiSession, BadArgumentsAndInvitesAreRefusedClearly) {
   EXPECT_EQ(csc_session_poll(s, nullptr, &has), CSC_ERROR_INVALID_ARGUMENT);
   e.struct_size = 4;
   EXPECT_EQ(csc_session_poll(s, &e, &has), CSC_ERROR_INVALID_ARGUMENT);
-  Host h(mesh);
-  h.arrays.vertex_count -= 1;
-  EXPECT_EQ(csc_session_submit(s, &h.arrays, 1, nullptr), CSC_ERROR_INVALID_INPUT);
-  h.arrays.vertex_count += 1;
+  HostArrays h(mesh);
+  csc_vertex_arrays vh = h.arrays();
+  vh.vertex_count -= 1;
+  EXPECT_EQ(csc_session_submit(s, &vh, 1, nullptr), CSC_ERROR_INVALID_INPUT);
+  vh.vertex_count += 1;
   h.positions[4] = std::nanf("");
-  EXPECT_EQ(csc_session_submit(s, &h.arrays, 1, nullptr), CSC_ERROR_INVALID_INPUT);
+  EXPECT_EQ(csc_session_submit(s, &vh, 1, nullptr), CSC_ERROR_INVALID_INPUT);
   EXPECT_TRUE(std::isnan(h.positions[4]));  // nothing written back on failure
   csc_session_destroy(s);
   csc_mesh_destroy(mesh);
