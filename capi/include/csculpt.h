@@ -363,14 +363,15 @@ CSC_API csc_status csc_diff_decode(csc_diff** out, const csc_mesh* base, uint64_
 
 /** The paper's method and the variants it is compared with (Fig. 3, Fig. 5). */
 typedef enum csc_merge_method {
-  CSC_MERGE_FULL = 0,                   /**< the paper's merge (default) */
+  CSC_MERGE_FULL = 0,                   /**< frame-transport merge (default) */
   CSC_MERGE_SINGLE_PARENT = 1,          /**< isometries, multiscale, a tree (K = 1) */
   CSC_MERGE_SINGLE_LEVEL_ISOMETRY = 2,  /**< isometries blended per vertex, no hierarchy */
   CSC_MERGE_MULTISCALE_TRANSLATION = 3, /**< translations on the hierarchy */
   CSC_MERGE_WEIGHTED_TRANSLATION = 4,   /**< translations blended per vertex by magnitude */
   CSC_MERGE_AVERAGE = 5,                /**< mean of the translations */
   CSC_MERGE_SUM = 6,                    /**< sum of the translations */
-  CSC_MERGE_PAPER_BLEND = 7,            /**< `full` with the paper's node blend literally */
+  CSC_MERGE_PAPER_BLEND = 7,            /**< the hierarchy merge with the paper's node blend */
+  CSC_MERGE_HIERARCHY_BLEND = 8,        /**< the hierarchy merge, intent-counting node blend */
   CSC_MERGE_METHOD_MAX_ENUM = 0x7FFFFFFF
 } csc_merge_method;
 

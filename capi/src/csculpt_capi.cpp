@@ -699,6 +699,7 @@ constexpr MethodName kMethods[] = {
     {CSC_MERGE_AVERAGE, csculpt::MergeMethod::average},
     {CSC_MERGE_SUM, csculpt::MergeMethod::sum},
     {CSC_MERGE_PAPER_BLEND, csculpt::MergeMethod::paper_blend},
+    {CSC_MERGE_HIERARCHY_BLEND, csculpt::MergeMethod::hierarchy_blend},
 };
 const MethodName* find_method(csc_merge_method m) {
   for (const MethodName& n : kMethods)

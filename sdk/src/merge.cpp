@@ -26,6 +26,7 @@
 #include "csculpt/error.h"
 #include "dq_simd.h"
 #include "dq_soa.h"
+#include "frame_transport.h"
 #include "vertex_isometry_kernel.h"
 #include "worker_pool.h"
 
@@ -37,7 +38,8 @@ double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-constexpr std::array<MergeMethod, 8> kMethods = {MergeMethod::full,
+constexpr std::array<MergeMethod, 9> kMethods = {MergeMethod::full,
+                                                 MergeMethod::hierarchy_blend,
                                                  MergeMethod::paper_blend,
                                                  MergeMethod::single_parent,
                                                  MergeMethod::single_level_isometry,
@@ -627,6 +629,7 @@ struct MethodTraits {
   TranslationBlend blend;
   NodeBlend node_blend;      // for positions and channels
   bool channels_per_vertex;  // channels blend per vertex (else over the hierarchy)
+  bool transport = false;    // positions: displacements carried in each other's frames
 };
 
 MethodTraits traits(MergeMethod m) {
@@ -635,6 +638,8 @@ MethodTraits traits(MergeMethod m) {
     // and a fine stroke inside it apart, so they merge per vertex (exact where one artist
     // painted, no hierarchy leak); paper-blend keeps the paper's hierarchy for them.
     case MergeMethod::full:
+      return {true, false, false, TranslationBlend::magnitude, NodeBlend::intent, true, true};
+    case MergeMethod::hierarchy_blend:
       return {true, true, false, TranslationBlend::magnitude, NodeBlend::intent, true};
     case MergeMethod::single_parent:
       return {true, true, true, TranslationBlend::magnitude, NodeBlend::intent, true};
@@ -704,6 +709,8 @@ struct Merger::Workspace {
   std::vector<SoleChange> sole;
   std::vector<Vec3f> moved;  ///< merged positions of the changed vertices, before listing
   std::vector<std::size_t> chunk_offset;  ///< where each chunk of them starts in the list
+  std::vector<detail::TransportInput> transport_inputs;
+  detail::TransportScratch transport;
   detail::WorkerPool pool;
 };
 
@@ -872,7 +879,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
               level0.set(v);
             },
             lk.touched, local);
-        lk.changed.clear(pd.indices);
+        if (!t.transport) lk.changed.clear(pd.indices);  // the transport reads it below
         level0.list.assign(lk.touched.begin(), lk.touched.end());
         iso_task_ms[u] = ms_since(task_t0);
         decompose<DqOps>(links, level_count, ws.dq_users[u]);
@@ -906,8 +913,29 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
         }
         ws.chunk_offset[begin / kGrain + 1] = kept;
       };
-      blend_and_reconstruct<DqOps>(links, level_count, std::span(ws.dq_users.data(), users),
-                                   ws.dq_merged, t.node_blend, ws.pool, &move_vertices);
+      if (t.transport) {
+        ws.transport_inputs.resize(users);
+        for (std::uint32_t u = 0; u < users; ++u) {
+          const auto& level0 = ws.dq_users[u].levels[0];
+          ws.transport_inputs[u] = {level0.values.data(), level0.bits.data(),
+                                    ws.lookups[u].slot.data(), ws.lookups[u].changed.words.data(),
+                                    diffs[order[u]]->positions.values.data()};
+        }
+        detail::transport_positions(base.positions, changed_union, ws.transport_inputs,
+                                    ws.transport, ws.pool, kGrain,
+                                    std::span(ws.moved.data(), n_changed));
+        for (std::uint32_t u = 0; u < users; ++u)
+          ws.lookups[u].changed.clear(diffs[order[u]]->positions.indices);
+        ws.pool.for_chunks(n_changed, kGrain, [&](std::size_t begin, std::size_t end) {
+          std::size_t kept = 0;
+          for (std::size_t i = begin; i < end; ++i)
+            kept += !(ws.moved[i] == base.positions[changed_union[i]]);
+          ws.chunk_offset[begin / kGrain + 1] = kept;
+        });
+      } else {
+        blend_and_reconstruct<DqOps>(links, level_count, std::span(ws.dq_users.data(), users),
+                                     ws.dq_merged, t.node_blend, ws.pool, &move_vertices);
+      }
       timings_.blend_ms += ms_since(t0);
       count_work(ws.dq_users, users, ws.dq_merged, level_count, sizeof(DualQuat));
       t0 = Clock::now();
@@ -1099,6 +1127,8 @@ std::string_view to_string(MergeMethod method) {
       return "sum";
     case MergeMethod::paper_blend:
       return "paper-blend";
+    case MergeMethod::hierarchy_blend:
+      return "hierarchy-blend";
   }
   return "unknown";
 }

@@ -18,8 +18,9 @@ namespace csculpt {
 
 /// The paper's algorithm and the variants it is compared with (Fig. 3, Fig. 5).
 enum class MergeMethod : std::uint32_t {
-  /// isometries, multiscale, K blended parents; residuals blended per node by magnitude and
-  /// counted once per intent (identical ones blend, independent ones add)
+  /// isometries: each artist's displacement carried in the frames the other artists' edits
+  /// give the surface (a detail turns and follows a coarse edit at its own height), each
+  /// intent counted once; exact where one artist acted (docs/merge-quality.md)
   full = 0,
   single_parent = 1,           ///< isometries, multiscale, a tree (K = 1)
   single_level_isometry = 2,   ///< isometries blended per vertex, no hierarchy
@@ -29,6 +30,9 @@ enum class MergeMethod : std::uint32_t {
   sum = 6,                     ///< sum of the translations
   /// `full` with the paper's node blend exactly: normalize(sum_j |q_j - 1| q_j)
   paper_blend = 7,
+  /// the previous `full`: isometries, multiscale, K blended parents; residuals blended per
+  /// node by magnitude and counted once per intent, recomposed coarse to fine
+  hierarchy_blend = 8,
 };
 
 std::string_view to_string(MergeMethod method);

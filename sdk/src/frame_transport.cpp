@@ -1,0 +1,237 @@
+#include "frame_transport.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+
+namespace csculpt::detail {
+namespace {
+
+constexpr std::uint32_t kNoSeam = 0xffffffffu;
+constexpr std::size_t kMaxUsers = 64;
+
+bool has(const std::uint64_t* bits, std::uint32_t v) {
+  return (bits[v >> 6] >> (v & 63) & 1) != 0;
+}
+
+struct D3 {
+  double x = 0, y = 0, z = 0;
+};
+D3 operator+(const D3& a, const D3& b) {
+  return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+D3 operator-(const D3& a, const D3& b) {
+  return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+D3 operator*(double s, const D3& a) {
+  return {s * a.x, s * a.y, s * a.z};
+}
+D3 cross(const D3& a, const D3& b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+double norm2(const D3& a) {
+  return a.x * a.x + a.y * a.y + a.z * a.z;
+}
+
+/// (R - I) v for the rotation of unit quaternion q: v' - v = w t + q.xyz x t, t = 2 q.xyz x v.
+D3 rotation_change(const Quat& q, const D3& v) {
+  const D3 u{q.x, q.y, q.z};
+  const D3 t = 2.0 * cross(u, v);
+  return double(q.w) * t + cross(u, t);
+}
+
+bool is_identity(const Quat& q) {
+  return q.w == 1.f && q.x == 0.f && q.y == 0.f && q.z == 0.f;
+}
+
+/// Everything the per-vertex formula needs about one vertex.
+struct VertexState {
+  std::array<D3, kMaxUsers> d;
+  std::array<double, kMaxUsers> size;
+  std::array<Quat, kMaxUsers> rotation;
+  std::array<bool, kMaxUsers> moves, turns;
+};
+
+class Transport {
+ public:
+  Transport(std::span<const Vec3f> base, std::span<const std::uint32_t> vertices,
+            std::span<const TransportInput> users, TransportScratch& scratch)
+      : base_(base), vertices_(vertices), users_(users), scratch_(scratch), n_(users.size()) {}
+
+  void find_seams();
+  void chunk_energy(std::size_t begin, std::size_t end, double* energy) const;
+  void finish_weights(std::size_t chunks);
+  Vec3f merged(std::size_t at) const;
+
+ private:
+  void load(std::size_t at, VertexState& s) const;
+  Quat rotation(std::size_t at, std::size_t i) const;
+
+  std::span<const Vec3f> base_;
+  std::span<const std::uint32_t> vertices_;
+  std::span<const TransportInput> users_;
+  TransportScratch& scratch_;
+  std::size_t n_;
+};
+
+std::uint64_t position_hash(const Vec3f& p) {
+  std::uint32_t b[3];
+  const float c[3] = {p.x + 0.f, p.y + 0.f, p.z + 0.f};  // -0 and +0 are one position
+  std::memcpy(b, c, sizeof(b));
+  std::uint64_t h = 0x9e3779b97f4a7c15ull;
+  for (std::uint32_t x : b) h = (h ^ x) * 0xff51afd7ed558ccdull, h ^= h >> 29;
+  return h;
+}
+
+/// Groups the listed vertices that sit at the same base position (split seams), and gives
+/// every member of a group, per diff, the normalised sum of the members' rotations.
+void Transport::find_seams() {
+  const std::size_t count = vertices_.size();
+  auto& seam_of = scratch_.seam_of;
+  seam_of.assign(count, kNoSeam);
+  scratch_.seam_first.clear();
+  std::size_t size = 64;
+  while (size < 2 * count) size *= 2;
+  auto& table = scratch_.table;
+  table.assign(size, 0);  // slot: 1 + position in the list, 0 = empty
+  for (std::size_t at = 0; at < count; ++at) {
+    const Vec3f& p = base_[vertices_[at]];
+    for (std::size_t h = position_hash(p) & (size - 1);; h = (h + 1) & (size - 1)) {
+      if (table[h] == 0) {
+        table[h] = at + 1;
+        break;
+      }
+      const std::size_t other = table[h] - 1;
+      const Vec3f& q = base_[vertices_[other]];
+      if (!(q.x == p.x && q.y == p.y && q.z == p.z)) continue;
+      if (seam_of[other] == kNoSeam) {
+        seam_of[other] = static_cast<std::uint32_t>(scratch_.seam_first.size());
+        scratch_.seam_first.push_back(static_cast<std::uint32_t>(other));
+      }
+      seam_of[at] = seam_of[other];
+      break;
+    }
+  }
+  const std::size_t groups = scratch_.seam_first.size();
+  auto& shared = scratch_.seam_rotation;
+  shared.assign(groups * n_, Quat{0, 0, 0, 0});
+  for (std::size_t at = 0; at < count; ++at) {
+    if (seam_of[at] == kNoSeam) continue;
+    for (std::size_t i = 0; i < n_; ++i) {
+      const std::uint32_t v = vertices_[at];
+      const Quat q = has(users_[i].rotated, v) ? users_[i].isometry[v].real : Quat{};
+      Quat& sum = shared[seam_of[at] * n_ + i];
+      sum = sum + (dot(sum, q) < 0 ? -1.f * q : q);
+    }
+  }
+  for (Quat& q : shared) {
+    const float n2 = dot(q, q);
+    q = n2 > 1e-30f ? (1.f / std::sqrt(n2)) * q : Quat{};
+  }
+}
+
+Quat Transport::rotation(std::size_t at, std::size_t i) const {
+  const std::uint32_t group = scratch_.seam_of[at];
+  if (group != kNoSeam) return scratch_.seam_rotation[group * n_ + i];
+  const std::uint32_t v = vertices_[at];
+  return has(users_[i].rotated, v) ? users_[i].isometry[v].real : Quat{};
+}
+
+void Transport::load(std::size_t at, VertexState& s) const {
+  const std::uint32_t v = vertices_[at];
+  const Vec3f& b = base_[v];
+  for (std::size_t i = 0; i < n_; ++i) {
+    const TransportInput& u = users_[i];
+    s.moves[i] = has(u.changed, v);
+    if (s.moves[i]) {
+      const float* e = u.edited + 3 * std::size_t{u.slot[v]};
+      s.d[i] = {double(e[0]) - b.x, double(e[1]) - b.y, double(e[2]) - b.z};
+    } else {
+      s.d[i] = {};
+    }
+    s.size[i] = std::sqrt(norm2(s.d[i]));
+    s.rotation[i] = rotation(at, i);
+    s.turns[i] = !is_identity(s.rotation[i]);
+  }
+}
+
+void Transport::chunk_energy(std::size_t begin, std::size_t end, double* energy) const {
+  std::fill(energy, energy + n_ * n_, 0.0);
+  VertexState s;
+  for (std::size_t at = begin; at < end; ++at) {
+    load(at, s);
+    for (std::size_t i = 0; i < n_; ++i) {
+      if (!s.turns[i]) continue;
+      for (std::size_t j = 0; j < n_; ++j)
+        if (j != i && s.moves[j]) energy[i * n_ + j] += norm2(rotation_change(s.rotation[i], s.d[j]));
+    }
+  }
+}
+
+void Transport::finish_weights(std::size_t chunks) {
+  auto& w = scratch_.weight;
+  w.assign(n_ * n_, 0.0);
+  std::vector<double>& e = scratch_.chunk_energy;
+  for (std::size_t c = 1; c < chunks; ++c)  // chunk sums in chunk order: fixed bits
+    for (std::size_t k = 0; k < n_ * n_; ++k) e[k] += e[c * n_ * n_ + k];
+  for (std::size_t i = 0; i < n_; ++i)
+    for (std::size_t j = 0; j < n_; ++j) {
+      if (i == j) continue;
+      const double ij = e[i * n_ + j], ji = e[j * n_ + i];
+      w[i * n_ + j] = ij + ji > 0 ? ji / (ij + ji) : 0.5;
+    }
+}
+
+/// s_ij: 1 for the same displacement, 0 for unrelated ones (or either zero).
+double sameness(const VertexState& s, std::size_t i, std::size_t j) {
+  const double m = std::max(s.size[i], s.size[j]);
+  if (!(m > 0)) return 0;
+  const double r = std::max(0.0, 1.0 - std::sqrt(norm2(s.d[i] - s.d[j])) / m);
+  return r * r;
+}
+
+Vec3f Transport::merged(std::size_t at) const {
+  VertexState s;
+  load(at, s);
+  const std::uint32_t v = vertices_[at];
+  const Vec3f& b = base_[v];
+  D3 sum{};
+  for (std::size_t j = 0; j < n_; ++j) {
+    if (!s.moves[j]) continue;
+    double count = 1;
+    for (std::size_t k = 0; k < n_; ++k)
+      if (k != j && s.moves[k]) count += sameness(s, j, k);
+    D3 carried = s.d[j];
+    for (std::size_t i = n_; i-- > 0;) {
+      if (i == j || !s.turns[i]) continue;
+      const double g = (1.0 - sameness(s, i, j)) * scratch_.weight[i * n_ + j];
+      if (g > 0) carried = carried + g * rotation_change(s.rotation[i], carried);
+    }
+    sum = sum + (count == 1 ? carried : (1.0 / count) * carried);
+  }
+  return {static_cast<float>(b.x + sum.x), static_cast<float>(b.y + sum.y),
+          static_cast<float>(b.z + sum.z)};
+}
+
+}  // namespace
+
+void transport_positions(std::span<const Vec3f> base, std::span<const std::uint32_t> vertices,
+                         std::span<const TransportInput> users, TransportScratch& scratch,
+                         WorkerPool& pool, std::size_t grain, std::span<Vec3f> moved) {
+  Transport t(base, vertices, users, scratch);
+  t.find_seams();
+  const std::size_t n = users.size();
+  const std::size_t chunks = std::max<std::size_t>(1, (vertices.size() + grain - 1) / grain);
+  scratch.chunk_energy.resize(chunks * n * n);
+  std::fill(scratch.chunk_energy.begin(), scratch.chunk_energy.begin() + n * n, 0.0);
+  pool.for_chunks(vertices.size(), grain, [&](std::size_t begin, std::size_t end) {
+    t.chunk_energy(begin, end, scratch.chunk_energy.data() + (begin / grain) * n * n);
+  });
+  t.finish_weights(chunks);
+  pool.for_chunks(vertices.size(), grain, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t at = begin; at < end; ++at) moved[at] = t.merged(at);
+  });
+}
+
+}  // namespace csculpt::detail

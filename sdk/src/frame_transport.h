@@ -1,0 +1,64 @@
+// Internal: the position merge of `full` — every artist's displacement carried in the local
+// frames of the other artists' edits (docs/merge-quality.md says why and what it fixes).
+//
+// For each vertex v changed by some diff, with d_j = e_j - b the displacement of diff j and
+// R_i the rotation of diff i at v (the per-vertex isometry's rotation, paper §3.1):
+//
+//   result = b + sum_j  T_j d_j / c_j,   T_j = prod_{i != j} (I + g_ij (R_i - I))
+//
+// - T_j transports a displacement into the frame the other edits give the surface there: a
+//   detail on a bend turns with the bend and keeps its height, on a cast it follows the new
+//   normals. Where no other diff rotates v, T_j = I and the edit comes back exactly.
+// - g_ij = (1 - s_ij) w_ij: whether i's frame carries j. w_ij = E_ji / (E_ij + E_ji) with
+//   E_ij = sum_v |(R_i - I) d_j|^2, the change i's frames would make to j's displacement;
+//   the coarser edit changes the finer one's displacement little and the finer edit's
+//   rotations would change the coarser's a lot, so the coarser edit carries the finer one
+//   (for a bump of width w on a bend of radius r the ratio is (r / w)^2). Every term is
+//   bounded by |(R_i - I) d_j|, so the result is continuous even where the weights switch.
+// - s_ij = max(0, 1 - |d_i - d_j| / max(|d_i|, |d_j|))^2 and c_j = sum_k s_jk count each
+//   intent once: identical edits come back once (idempotence), independent ones add.
+// - Coincident vertices that are not connected (split seams) share one rotation per diff,
+//   so a seam that the artists moved together stays closed.
+// Products and sums run in the canonical order of the diffs, per vertex in double, and the
+// sums E in fixed chunks added in order: the result is bit-identical for any diff order,
+// thread count or SIMD width.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "csculpt/dual_quat.h"
+#include "csculpt/vec3.h"
+#include "worker_pool.h"
+
+namespace csculpt::detail {
+
+/// One diff as the transport reads it, in the merge's canonical order.
+struct TransportInput {
+  /// Per vertex: its rotation under this diff, valid where `rotated` has the vertex's bit.
+  const DualQuat* isometry = nullptr;
+  const std::uint64_t* rotated = nullptr;
+  /// Per vertex: the slot of its edited position in `edited`, valid where `changed` is set.
+  const std::uint32_t* slot = nullptr;
+  const std::uint64_t* changed = nullptr;
+  const float* edited = nullptr;  ///< xyz per changed vertex
+};
+
+/// Scratch reused across merges (no allocation once warm).
+struct TransportScratch {
+  std::vector<double> chunk_energy;  ///< per chunk, users x users sums of |(R_i - I) d_j|^2
+  std::vector<double> weight;        ///< users x users: w_ij
+  std::vector<Quat> seam_rotation;   ///< per seam member and diff: the shared rotation
+  std::vector<std::uint32_t> seam_of;      ///< per listed vertex: its seam group or kNoSeam
+  std::vector<std::uint64_t> table;        ///< open-addressing table: (position hash, index)
+  std::vector<std::uint32_t> seam_first;   ///< per seam group: first position in the list
+};
+
+/// Merged positions of the vertices in `vertices` (increasing: the union of the changed
+/// ones) into `moved` (one per vertex), using `pool` in chunks of `grain`.
+void transport_positions(std::span<const Vec3f> base, std::span<const std::uint32_t> vertices,
+                         std::span<const TransportInput> users, TransportScratch& scratch,
+                         WorkerPool& pool, std::size_t grain, std::span<Vec3f> moved);
+
+}  // namespace csculpt::detail
