@@ -94,6 +94,7 @@ class MergeMethod(enum.IntEnum):
     AVERAGE = 5
     SUM = 6
     PAPER_BLEND = 7
+    HIERARCHY_BLEND = 8
     METHOD_MAX_ENUM = 0x7FFFFFFF
 
 

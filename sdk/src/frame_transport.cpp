@@ -178,7 +178,8 @@ void Transport::finish_weights(std::size_t chunks) {
   for (std::size_t i = 0; i < n_; ++i)
     for (std::size_t j = 0; j < n_; ++j) {
       if (i == j) continue;
-      const double ij = e[i * n_ + j], ji = e[j * n_ + i];
+      // squared, so that the finer edit's share falls as the fourth power of the scale ratio
+      const double ij = e[i * n_ + j] * e[i * n_ + j], ji = e[j * n_ + i] * e[j * n_ + i];
       w[i * n_ + j] = ij + ji > 0 ? ji / (ij + ji) : 0.5;
     }
 }

@@ -9,7 +9,7 @@
 // - T_j transports a displacement into the frame the other edits give the surface there: a
 //   detail on a bend turns with the bend and keeps its height, on a cast it follows the new
 //   normals. Where no other diff rotates v, T_j = I and the edit comes back exactly.
-// - g_ij = (1 - s_ij) w_ij: whether i's frame carries j. w_ij = E_ji / (E_ij + E_ji) with
+// - g_ij = (1 - s_ij) w_ij: whether i's frame carries j. w_ij = E_ji^2 / (E_ij^2 + E_ji^2) with
 //   E_ij = sum_v |(R_i - I) d_j|^2, the change i's frames would make to j's displacement;
 //   the coarser edit changes the finer one's displacement little and the finer edit's
 //   rotations would change the coarser's a lot, so the coarser edit carries the finer one

@@ -1383,7 +1383,7 @@ TEST(CapiMergeMethods, NamesRoundTripAndUnknownValuesAreRefused) {
   EXPECT_EQ(names[1], "single-parent");
   std::sort(names.begin(), names.end());
   EXPECT_EQ(std::unique(names.begin(), names.end()), names.end());
-  for (std::int64_t m : {8LL, 99LL, 0x7FFFFFFFLL})
+  for (std::int64_t m : {9LL, 99LL, 0x7FFFFFFFLL})
     EXPECT_EQ(csc_merge_method_name(static_cast<csc_merge_method>(m)), nullptr) << m;
 
   csc_merge_method out = CSC_MERGE_SUM;
@@ -1441,7 +1441,7 @@ TEST_F(Capi, MergeBadArguments) {
   o.struct_size = 0;
   EXPECT_FAILS(csc_merger_merge(merger.get(), &out, mesh.get(), one, 1, &o),
                CSC_ERROR_INVALID_ARGUMENT, "struct_size");
-  for (std::int64_t m : {8LL, 99LL, 0x7FFFFFFFLL}) {
+  for (std::int64_t m : {9LL, 99LL, 0x7FFFFFFFLL}) {
     o = CSC_MERGE_OPTIONS_INIT;
     o.method = static_cast<csc_merge_method>(m);
     EXPECT_FAILS(csc_merger_merge(merger.get(), &out, mesh.get(), one, 1, &o),
