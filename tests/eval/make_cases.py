@@ -1,0 +1,603 @@
+# Builds merge cases from edits authored by Blender's own deformers.
+# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2]
+# (Debian 12: apt-get install blender assimp-testmodels). Add your own case() lines to author more.
+# Each case directory holds base.ply, a.ply, b.ply (same vertices and faces, moved
+# by two independent Blender modifier stacks) and ideal.ply where an ideal exists
+# (both stacks applied in sequence, so a detail edit rides along a coarse one).
+import bpy, bmesh, struct, sys, os, math, mathutils
+
+out = sys.argv[sys.argv.index("--") + 1] if "--" in sys.argv else "cases"
+SPIDER_OBJ = "/usr/share/assimp/models/OBJ/spider.obj"  # 18 separate parts
+SPIDER = {}  # landmarks on the normalised spider, found from its vertices when it is loaded
+os.makedirs(out, exist_ok=True)
+
+def clear():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+
+def triangulated(obj):
+    bm = bmesh.new(); bm.from_mesh(obj.data)
+    bmesh.ops.triangulate(bm, faces=bm.faces[:])
+    bm.to_mesh(obj.data); bm.free()
+
+def write_ply(path, verts, faces):
+    with open(path, "wb") as f:
+        f.write(("ply\nformat binary_little_endian 1.0\nelement vertex %d\n"
+                 "property float x\nproperty float y\nproperty float z\n"
+                 "element face %d\nproperty list uchar int vertex_indices\nend_header\n"
+                 % (len(verts), len(faces))).encode())
+        for v in verts: f.write(struct.pack("<3f", *v))
+        for t in faces: f.write(struct.pack("<B3i", 3, *t))
+
+def evaluated_verts(obj):
+    dg = bpy.context.evaluated_depsgraph_get()
+    ev = obj.evaluated_get(dg)
+    me = ev.to_mesh()
+    vs = [tuple(v.co) for v in me.vertices]
+    ev.to_mesh_clear()
+    return vs
+
+def group(obj, name, center, radius):
+    g = obj.vertex_groups.new(name=name)
+    c = mathutils.Vector(center)
+    for v in obj.data.vertices:
+        d = (v.co - c).length
+        if d < radius:
+            w = 0.5 * (1 + math.cos(math.pi * d / radius))
+            g.add([v.index], w, 'REPLACE')
+    return g.name  # "name.001" when the edit is made again on the same object
+
+def empty(loc, rot=(0, 0, 0)):
+    e = bpy.data.objects.new("e", None); e.location = loc; e.rotation_euler = rot
+    bpy.context.scene.collection.objects.link(e); return e
+
+def detail(obj, center, radius, strength, seed):
+    gname = group(obj, "detail%d" % seed, center, radius)
+    tex = bpy.data.textures.new("n%d" % seed, 'CLOUDS'); tex.noise_scale = radius / 6
+    tex.noise_depth = 2
+    m = obj.modifiers.new("detail%d" % seed, 'DISPLACE')
+    m.texture = tex; m.vertex_group = gname; m.strength = strength; m.mid_level = 0.5
+    m.texture_coords = 'LOCAL'
+    return m
+
+def grab(obj, frm, to, radius):
+    m = obj.modifiers.new("grab", 'WARP')
+    m.object_from = empty(frm); m.object_to = empty(to)
+    m.falloff_radius = radius; m.falloff_type = 'SMOOTH'; m.strength = 1.0
+    return m
+
+def twist(obj, angle, axis='Z'):
+    m = obj.modifiers.new("twist", 'SIMPLE_DEFORM')
+    m.deform_method = 'TWIST'; m.angle = angle; m.deform_axis = axis
+    return m
+
+def bend(obj, angle, axis='Z'):
+    m = obj.modifiers.new("bend", 'SIMPLE_DEFORM')
+    m.deform_method = 'BEND'; m.angle = angle; m.deform_axis = axis
+    return m
+
+def smooth(obj, center, radius, factor, repeat):
+    gname = group(obj, "smooth", center, radius)
+    m = obj.modifiers.new("smooth", 'SMOOTH'); m.factor = factor; m.iterations = repeat
+    m.vertex_group = gname
+    return m
+
+def base_object(kind):
+    clear()
+    if kind == "sphere":
+        bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=6, radius=1.0)
+    elif kind == "monkey":
+        bpy.ops.mesh.primitive_monkey_add(size=2.0)
+        o = bpy.context.object
+        s = o.modifiers.new("s", 'SUBSURF'); s.levels = 3
+        bpy.ops.object.modifier_apply(modifier="s")
+    elif kind == "capsule":
+        bpy.ops.mesh.primitive_cylinder_add(vertices=128, radius=0.4, depth=3.0, end_fill_type='TRIFAN')
+        o = bpy.context.object
+        bm = bmesh.new(); bm.from_mesh(o.data)
+        edges = [e for e in bm.edges if abs(e.verts[0].co.z - e.verts[1].co.z) > 1e-6]
+        bmesh.ops.subdivide_edges(bm, edges=edges, cuts=120, use_grid_fill=False)
+        bm.to_mesh(o.data); bm.free()
+    elif kind == "torus":
+        bpy.ops.mesh.primitive_torus_add(major_segments=192, minor_segments=64, major_radius=1.0, minor_radius=0.3)
+    elif kind == "spider":
+        bpy.ops.import_scene.obj(filepath=SPIDER_OBJ)
+        o = bpy.context.selected_objects[0]; bpy.context.view_layer.objects.active = o
+        bpy.ops.object.transform_apply(location=True, rotation=True, scale=True)
+        bm = bmesh.new(); bm.from_mesh(o.data)
+        bmesh.ops.remove_doubles(bm, verts=bm.verts, dist=1e-5)
+        bm.to_mesh(o.data); bm.free()
+        vs = [v.co.copy() for v in o.data.vertices]
+        lo = mathutils.Vector([min(v[i] for v in vs) for i in range(3)])
+        hi = mathutils.Vector([max(v[i] for v in vs) for i in range(3)])
+        c, sc = (lo + hi) / 2, 2.0 / max(hi - lo)
+        for v in o.data.vertices: v.co = (v.co - c) * sc
+        s = o.modifiers.new("s", 'SUBSURF'); s.levels = 3
+        bpy.ops.object.modifier_apply(modifier="s")
+        vs = [v.co.copy() for v in o.data.vertices]
+        SPIDER["a"] = tuple(max(vs, key=lambda v: v.x))
+        SPIDER["top"] = tuple(max(vs, key=lambda v: v.z))
+        SPIDER["c"] = tuple(max(vs, key=lambda v: v.y))
+    else:
+        held_object(kind)
+    o = bpy.context.object
+    triangulated(o)
+    return o
+
+M = "/usr/share/assimp/models/"
+LM = {}  # landmarks of the held set's meshes: LM[name] = (position, Blender's vertex normal)
+
+def normalised(o):
+    """centred on its bounding box and scaled to a largest extent of 2, nothing else changed"""
+    vs = [v.co.copy() for v in o.data.vertices]
+    lo = mathutils.Vector([min(v[i] for v in vs) for i in range(3)])
+    hi = mathutils.Vector([max(v[i] for v in vs) for i in range(3)])
+    c, sc = (lo + hi) / 2, 2.0 / max(hi - lo)
+    for v in o.data.vertices: v.co = (v.co - c) * sc
+    o.data.update()
+
+def unparented():
+    """every object freed from its parent (an importer's node tree), keeping where it is, so
+    that transform_apply leaves the mesh in world space with an identity matrix"""
+    bpy.context.view_layer.update()
+    for x in bpy.context.scene.objects:
+        mw = x.matrix_world.copy(); x.parent = None; x.matrix_world = mw
+
+def imported(op, expect, **kw):
+    """the file's mesh as one object with its transforms applied; expect: the file's own
+    vertex count, which Blender's importer must have kept (no merge, no split)"""
+    op(**kw)
+    unparented()
+    obs = [x for x in bpy.context.scene.objects if x.type == 'MESH']
+    for x in bpy.context.scene.objects: x.select_set(x.type == 'MESH')
+    bpy.context.view_layer.objects.active = obs[0]
+    if len(obs) > 1: bpy.ops.object.join()
+    o = bpy.context.view_layer.objects.active
+    bpy.ops.object.transform_apply(location=True, rotation=True, scale=True)
+    assert o.matrix_world == mathutils.Matrix.Identity(4)
+    assert expect is None or len(o.data.vertices) == expect, (len(o.data.vertices), expect)
+    return o
+
+def welded(o, dist=1e-5):
+    bm = bmesh.new(); bm.from_mesh(o.data)
+    bmesh.ops.remove_doubles(bm, verts=bm.verts, dist=dist)
+    bm.to_mesh(o.data); bm.free()
+
+def subdivided(o, levels):
+    s = o.modifiers.new("s", 'SUBSURF'); s.levels = levels
+    bpy.ops.object.modifier_apply(modifier="s")
+
+def obj_vertex_count(path):
+    with open(path, "rb") as f: return sum(1 for l in f if l.startswith(b"v "))
+
+def ply_vertex_count(path):
+    with open(path, "rb") as f:
+        for l in f:
+            if l.startswith(b"element vertex"): return int(l.split()[2])
+
+ENGINE_GLB = M + "glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb"
+
+def glb_nodes(path):
+    """(node name, vertex count) of every mesh instance in the glb, from its own accessors"""
+    import json
+    with open(path, "rb") as f: data = f.read()
+    j = json.loads(data[20:20 + struct.unpack_from("<I", data, 12)[0]])
+    out = []
+    def walk(n):
+        nd = j["nodes"][n]
+        if "mesh" in nd:
+            out.append((nd.get("name"), sum(j["accessors"][p["attributes"]["POSITION"]]["count"]
+                                            for p in j["meshes"][nd["mesh"]]["primitives"])))
+        for c in nd.get("children", []): walk(c)
+    for sc in j["scenes"]:
+        for n in sc["nodes"]: walk(n)
+    return out
+
+def engine_end():
+    """the crank end of Debian's 2CylinderEngine.glb (a CAD assembly, flat shaded: its vertices
+    are split along every hard edge), the objects whose centre lies at x < -295, y > 15 in the
+    file's frame, joined as they ship"""
+    import numpy
+    if not hasattr(numpy, "bool"): numpy.bool = bool  # Blender 3.4's glTF importer vs numpy 1.24
+    bpy.ops.import_scene.gltf(filepath=ENGINE_GLB, merge_vertices=False)
+    assert sum(len(x.data.vertices) for x in bpy.context.scene.objects if x.type == 'MESH') == \
+        sum(n for _, n in glb_nodes(ENGINE_GLB))  # the importer kept the file's vertices
+    unparented()
+    keep = []
+    for x in list(bpy.context.scene.objects):
+        if x.type != 'MESH': continue
+        co = [x.matrix_world @ v.co for v in x.data.vertices]
+        c = [(min(v[i] for v in co) + max(v[i] for v in co)) / 2 for i in range(3)]
+        if c[0] < -295 and c[1] > 15: keep.append(x)
+        else: bpy.data.objects.remove(x)
+    n = sum(len(x.data.vertices) for x in keep)
+    for x in bpy.context.scene.objects: x.select_set(x in keep)
+    bpy.context.view_layer.objects.active = keep[0]
+    bpy.ops.object.join()
+    o = bpy.context.view_layer.objects.active
+    bpy.ops.object.transform_apply(location=True, rotation=True, scale=True)
+    assert len(o.data.vertices) == n and o.matrix_world == mathutils.Matrix.Identity(4)
+    return o
+
+def cylinder_capsule(segments, cuts):
+    bpy.ops.mesh.primitive_cylinder_add(vertices=segments, radius=0.4, depth=3.0, end_fill_type='TRIFAN')
+    o = bpy.context.object
+    bm = bmesh.new(); bm.from_mesh(o.data)
+    edges = [e for e in bm.edges if abs(e.verts[0].co.z - e.verts[1].co.z) > 1e-6]
+    bmesh.ops.subdivide_edges(bm, edges=edges, cuts=cuts, use_grid_fill=False)
+    bm.to_mesh(o.data); bm.free()
+    return o
+
+def held_object(kind):
+    """the held set's meshes; the ones named *_shipped are the files as they ship: no weld, no
+    subdivision, only centred and scaled (normalised), so their split seams and degenerate
+    faces remain"""
+    if kind == "capsule_lo":
+        o = cylinder_capsule(80, 72)
+    elif kind == "monkey2":
+        bpy.ops.mesh.primitive_monkey_add(size=2.0); o = bpy.context.object; subdivided(o, 2)
+    elif kind == "torus_lo":
+        bpy.ops.mesh.primitive_torus_add(major_segments=112, minor_segments=40, major_radius=1.0, minor_radius=0.3)
+        o = bpy.context.object
+    elif kind == "cube":
+        bpy.ops.mesh.primitive_cube_add(size=2.0); o = bpy.context.object
+        bm = bmesh.new(); bm.from_mesh(o.data)
+        bmesh.ops.subdivide_edges(bm, edges=bm.edges[:], cuts=25, use_grid_fill=True)
+        bm.to_mesh(o.data); bm.free()
+    elif kind == "wuson":  # WusonOBJ.obj: 51 parts once welded; subdivided once
+        o = imported(bpy.ops.import_scene.obj, obj_vertex_count(M + "OBJ/WusonOBJ.obj"), filepath=M + "OBJ/WusonOBJ.obj")
+        welded(o); normalised(o); subdivided(o, 1)
+    elif kind == "mocap":  # 3DSMaxExport.STL: 24 parts (the STL importer welds exact duplicates)
+        o = imported(bpy.ops.import_mesh.stl, None, filepath=M + "STL/3DSMaxExport.STL")
+        welded(o); normalised(o); subdivided(o, 2 if "2" in kind else 1)
+    elif kind == "wuson_shipped":  # Wuson.ply as it ships: nearly a triangle soup
+        o = imported(bpy.ops.import_mesh.ply, ply_vertex_count(M + "PLY/Wuson.ply"), filepath=M + "PLY/Wuson.ply")
+        normalised(o)
+    elif kind == "spider_shipped":  # spider.obj as it ships: split seams, degenerate faces
+        o = imported(bpy.ops.import_scene.obj, obj_vertex_count(SPIDER_OBJ), filepath=SPIDER_OBJ)
+        normalised(o)
+    elif kind == "engine_shipped":
+        o = engine_end(); normalised(o)
+    else:
+        raise ValueError(kind)
+    bpy.context.view_layer.objects.active = o; o.select_set(True)
+    # landmarks: the vertex farthest along each axis direction, with its normal
+    for name, dv in (("+x", (1, 0, 0)), ("-x", (-1, 0, 0)), ("+y", (0, 1, 0)), ("-y", (0, -1, 0)),
+                     ("+z", (0, 0, 1)), ("-z", (0, 0, -1))):
+        v = max(o.data.vertices, key=lambda v: v.co.dot(mathutils.Vector(dv)))
+        LM[name] = (tuple(v.co), tuple(v.normal))
+
+def snapshot(o):
+    return [tuple(v.co) for v in o.data.vertices], [tuple(p.vertices) for p in o.data.polygons]
+
+def coincident(verts):
+    """rep[i]: the first vertex at vertex i's position (to 1e-6 of the mesh's size): a mesh as
+    it ships keeps split seams, i.e. vertices at one place that no face joins."""
+    lo = [min(v[k] for v in verts) for k in range(3)]; hi = [max(v[k] for v in verts) for k in range(3)]
+    tol = 1e-6 * max(h - l for h, l in zip(hi, lo))
+    first, rep = {}, []
+    for i, v in enumerate(verts):
+        rep.append(first.setdefault(tuple(round(c / tol) for c in v), i))
+    return rep
+
+def surface_normals(verts, faces, rep):
+    """Blender's vertex normals of the surface with coincident vertices welded (rep), one per
+    input vertex: split copies of one point share one normal, so they share one frame."""
+    uniq = sorted(set(rep)); idx = {r: i for i, r in enumerate(uniq)}
+    fs = [tuple(idx[rep[i]] for i in f) for f in faces]
+    me = bpy.data.meshes.new("welded")
+    me.from_pydata([verts[r] for r in uniq], [], [f for f in fs if len(set(f)) == 3]); me.update()
+    n = [me.vertices[idx[rep[i]]].normal.copy() for i in range(len(verts))]
+    bpy.data.meshes.remove(me)
+    return n
+
+def normal_detail(o, edit):
+    """True when the edit displaces along the vertex normal only (Displace, direction NORMAL):
+    its height then is re-applied along the deformed normal; any other detail (a Warp, a
+    SimpleDeform, a Displace along an axis or RGB_TO_XYZ) moves the surface sideways too, and
+    its displacement vector is re-applied rotated with the surface."""
+    edit(o)
+    r = all(m.type == 'DISPLACE' and m.direction == 'NORMAL' for m in o.modifiers)
+    o.modifiers.clear()
+    return r
+
+def frame_ideal(o, d, faces, base, edited, is_detail, edits):
+    """ideal_frame.ply: the coarse edits applied first (Blender's modifiers), then every detail
+    re-applied in the local frame that follows the surface: a Displace along the normal with the
+    same height along the *deformed* surface's vertex normals (Blender's own); any other detail
+    (tangential: a small Warp, a pinch, a local twist, a Displace along an axis) with its
+    displacement vector turned by the minimal rotation taking the base vertex normal to the
+    deformed vertex normal. A detail keeps its height and its sideways motion and follows the
+    surface, as multiresolution editing defines it. Details add up. On a mesh as it ships
+    (coincident vertices), the normals are those of the welded surface, so split copies of a
+    point stay together."""
+    rep = coincident(base)
+    welded = any(r != i for i, r in enumerate(rep))
+    normals = surface_normals(base, faces, rep) if welded else [v.normal.copy() for v in o.data.vertices]
+    h = [0.0] * len(base)
+    t = [mathutils.Vector((0, 0, 0)) for _ in base]
+    for e, det, edit in zip(edited, is_detail, edits):
+        if not det: continue
+        along = normal_detail(o, edit)
+        for i, (p, q) in enumerate(zip(e, base)):
+            dv = mathutils.Vector(p) - mathutils.Vector(q)
+            if along:  # a Displace moved it along a normal: its height is the length
+                h[i] += dv.length if dv.dot(normals[i]) >= 0 else -dv.length
+            else:
+                t[i] += dv
+    for edit, det in zip(edits, is_detail):
+        if not det: edit(o)
+    dg = bpy.context.evaluated_depsgraph_get(); ev = o.evaluated_get(dg); me = ev.to_mesh()
+    if welded:
+        co = [tuple(v.co) for v in me.vertices]
+        dn = surface_normals(co, faces, rep)
+        vs = [tuple(mathutils.Vector(c) + x * n + n0.rotation_difference(n) @ ti)
+              for c, n, n0, x, ti in zip(co, dn, normals, h, t)]
+    else:
+        vs = [tuple(v.co + x * v.normal + n0.rotation_difference(v.normal) @ ti)
+              for v, n0, x, ti in zip(me.vertices, normals, h, t)]
+    ev.to_mesh_clear()
+    write_ply(os.path.join(d, "ideal_frame.ply"), vs, faces)
+    o.modifiers.clear()
+
+def flips(p, q, faces):
+    """faces whose normal turned by more than 90 degrees from p to q"""
+    n = 0
+    for f in faces:
+        a, b, c = (mathutils.Vector(p[i]) for i in f); x, y, z = (mathutils.Vector(q[i]) for i in f)
+        n += (b - a).cross(c - a).dot((y - x).cross(z - x)) < 0
+    return n
+
+def case(name, kind, edits, ideal=None, details=None):
+    """edits: functions that each add one artist's modifiers; ideal: None, 'stack' (all edits
+    applied in the given order, fine details first) or 'same' (the first edit alone);
+    details: the indices of the edits that are details (re-applied along the surface in
+    ideal_frame.ply), the others being coarse edits; None: the edits made of Displace
+    modifiers only (as the shared sets were authored)."""
+    d = os.path.join(out, name); os.makedirs(d, exist_ok=True)
+    o = base_object(kind); base, faces = snapshot(o)
+    write_ply(os.path.join(d, "base.ply"), base, faces)
+    edited, is_detail = [], []
+    for k, (letter, edit) in enumerate(zip("abcdefgh", edits)):
+        edit(o); edited.append(evaluated_verts(o)); write_ply(os.path.join(d, letter + ".ply"), edited[-1], faces)
+        is_detail.append(all(m.type == 'DISPLACE' for m in o.modifiers) if details is None else k in details)
+        o.modifiers.clear()
+    results = {}
+    if ideal == "stack":
+        for edit in edits: edit(o)
+        results["ideal"] = evaluated_verts(o)
+        write_ply(os.path.join(d, "ideal.ply"), results["ideal"], faces)
+        o.modifiers.clear()
+        if any(is_detail) and not all(is_detail):
+            frame_ideal(o, d, faces, base, edited, is_detail, edits)
+    elif ideal == "same":
+        edits[0](o); write_ply(os.path.join(d, "ideal.ply"), evaluated_verts(o), faces)
+    o.modifiers.clear()
+    print("CASE", name, len(base), "vertices", len(faces), "faces")
+    if which != "held": return
+    # what the case holds, for the README: parts, split seams, each edit's size and folds
+    rep = coincident(base)
+    files = dict(zip("abcdefgh", edited)); files.update(results)
+    if os.path.exists(os.path.join(d, "ideal_frame.ply")):
+        files["ideal_frame"] = read_ply_verts(os.path.join(d, "ideal_frame.ply"))
+    for key, vs in files.items():
+        disp = [(mathutils.Vector(p) - mathutils.Vector(q)).length for p, q in zip(vs, base)]
+        spread = max(((mathutils.Vector(vs[i]) - mathutils.Vector(vs[r])) -
+                      (mathutils.Vector(base[i]) - mathutils.Vector(base[r]))).length for i, r in enumerate(rep))
+        role = ("detail" if is_detail["abcdefgh".index(key)] else "coarse") if len(key) == 1 else "ideal"
+        print("  %-12s %-6s moved=%6d max=%.4f rms=%.4f folds=%d split_gap=%.2g" % (
+            key, role, sum(x > 1e-6 for x in disp), max(disp),
+            math.sqrt(sum(x * x for x in disp) / max(1, sum(x > 1e-6 for x in disp))),
+            flips(base, vs, faces), spread))
+    print("  parts=%d parts_welded=%d coincident_extra=%d" % (
+        parts(len(base), faces, list(range(len(base)))), parts(len(base), faces, rep),
+        sum(r != i for i, r in enumerate(rep))))
+
+def parts(n, faces, rep):
+    """connected components of the faces, vertices identified by rep"""
+    p = list(range(n))
+    def find(x):
+        while p[x] != x: p[x] = p[p[x]]; x = p[x]
+        return x
+    for f in faces:
+        a = find(rep[f[0]])
+        for i in f[1:]:
+            b = find(rep[i])
+            if a != b: p[b] = a
+    return len({find(rep[i]) for f in faces for i in f})
+
+def read_ply_verts(path):
+    with open(path, "rb") as f: data = f.read()
+    end = data.index(b"end_header\n") + len(b"end_header\n")
+    n = int([l for l in data[:end].decode().splitlines() if l.startswith("element vertex")][0].split()[2])
+    return [struct.unpack_from("<3f", data, end + 12 * i) for i in range(n)]
+
+def cast(obj, factor):
+    m = obj.modifiers.new("cast", 'CAST'); m.factor = factor; return m
+
+def simple(obj, method, factor, axis='Z'):
+    m = obj.modifiers.new(method.lower(), 'SIMPLE_DEFORM')
+    m.deform_method = method; m.factor = factor; m.deform_axis = axis
+    return m
+
+def wave(obj, height, width):
+    m = obj.modifiers.new("wave", 'WAVE'); m.height = height; m.width = width
+    m.use_normal = True; m.narrowness = 1.0; return m
+
+def detail_along(obj, center, radius, strength, seed, axis):
+    """a detail that moves every point of the soft vertex group along one axis (X, Y or Z):
+    it depends on positions only, so on a mesh as it ships coincident copies move together
+    (a Displace along the normals would tear its split seams open)"""
+    m = detail(obj, center, radius, strength, seed); m.direction = axis
+    return m
+
+def tiny_grab(obj, frm, offset, radius):
+    """a small Warp: a grab brush of small radius dragged sideways along the surface"""
+    return grab(obj, frm, tuple(c + d for c, d in zip(frm, offset)), radius)
+
+def pinch(obj, center, radius, scale):
+    """a Warp toward a point: the region within radius is scaled about center by scale
+    (smooth falloff), drawing the surface in sideways as a pinch brush does"""
+    m = obj.modifiers.new("pinch", 'WARP')
+    m.object_from = empty(center); m.object_to = empty(center); m.object_to.scale = (scale,) * 3
+    m.falloff_radius = radius; m.falloff_type = 'SMOOTH'; m.strength = 1.0
+    return m
+
+def local_twist(obj, center, normal, radius, angle, depth=0.5):
+    """a small local twist: SimpleDeform TWIST about the surface normal at center, restricted
+    to a soft vertex group of the given radius; its origin lies depth below the surface, so
+    the patch turns by about angle * depth (times the weight) about the normal: a swirl"""
+    n = mathutils.Vector(normal).normalized()
+    e = empty(tuple(mathutils.Vector(center) - depth * n), n.to_track_quat('Z', 'Y').to_euler())
+    gname = group(obj, "swirl", center, radius)
+    m = obj.modifiers.new("swirl", 'SIMPLE_DEFORM')
+    m.deform_method = 'TWIST'; m.deform_axis = 'Z'; m.origin = e; m.angle = angle
+    m.vertex_group = gname
+    return m
+
+def near(o, p):
+    """the base vertex nearest p: (position, Blender's normal)"""
+    v = min(o.data.vertices, key=lambda v: (v.co - mathutils.Vector(p)).length)
+    return tuple(v.co), tuple(v.normal)
+
+def simple_part(obj, method, angle, axis, z0, below):
+    """SimpleDeform (TWIST or BEND) on the part of the mesh below (or above) the plane z = z0
+    only: its origin at (0, 0, z0) and its limits cut at that plane, so the rest stays put"""
+    m = obj.modifiers.new(method.lower(), 'SIMPLE_DEFORM')
+    m.deform_method = method; m.angle = angle; m.deform_axis = axis; m.origin = empty((0, 0, z0))
+    zs = [v.co.z for v in obj.data.vertices]; cut = (z0 - min(zs)) / (max(zs) - min(zs))
+    m.limits = (0.0, cut) if below else (cut, 1.0)
+    return m
+
+def cast_part(obj, factor, center, radius):
+    """Cast (spherify) weighted by a soft vertex group: a large non-rigid edit of one region"""
+    m = cast(obj, factor); m.vertex_group = group(obj, "cast", center, radius)
+    return m
+
+def at(name, scale=1.0, offset=(0, 0, 0)):
+    """a landmark's position (times scale, plus offset)"""
+    return tuple(c * scale + d for c, d in zip(LM[name][0], offset))
+
+def plus(p, d):
+    return tuple(a + b for a, b in zip(p, d))
+
+which = sys.argv[sys.argv.index("--") + 2] if "--" in sys.argv and len(sys.argv) > sys.argv.index("--") + 2 else "public"
+if which == "public":
+    case("disjoint_sphere", "sphere",
+         [lambda o: detail(o, (0.9, 0, 0.3), 0.45, 0.08, 1),
+          lambda o: grab(o, (-1, 0, 0), (-1.3, 0.1, 0), 0.5)], "stack")
+    case("identical_capsule", "capsule",
+         [lambda o: bend(o, math.radians(60), 'X'),
+          lambda o: bend(o, math.radians(60), 'X')], "same")
+    case("grab_plus_detail_monkey", "monkey",
+         [lambda o: detail(o, (0, -0.8, 0.4), 0.35, 0.06, 2),
+          lambda o: grab(o, (0, -0.6, 0.6), (0, -1.0, 1.0), 1.4)], "stack")
+    case("bend_plus_detail_capsule", "capsule",
+         [lambda o: detail(o, (0.4, 0, 0.9), 0.3, 0.05, 3),
+          lambda o: bend(o, math.radians(75), 'X')], "stack")
+    case("twist_plus_detail_capsule", "capsule",
+         [lambda o: detail(o, (0, 0.4, 0.6), 0.3, 0.05, 4),
+          lambda o: twist(o, math.radians(90), 'Z')], "stack")
+    case("grab_vs_smooth_monkey", "monkey",
+         [lambda o: grab(o, (0, -0.8, 0.0), (0.2, -1.1, 0.2), 0.9),
+          lambda o: smooth(o, (0, -0.8, 0.0), 0.9, 1.0, 20)], None)
+elif which == "public2":
+    case("cast_plus_detail_monkey", "monkey",
+         [lambda o: detail(o, (0, -0.7, 0.55), 0.35, 0.06, 21),
+          lambda o: cast(o, 0.4)], "stack")
+    case("taper_plus_detail_capsule", "capsule",
+         [lambda o: detail(o, (0, 0.4, 0.8), 0.3, 0.05, 22),
+          lambda o: simple(o, 'TAPER', 0.7, 'Z')], "stack")
+    case("stretch_plus_detail_capsule", "capsule",
+         [lambda o: detail(o, (0.4, 0, -0.6), 0.3, 0.05, 23),
+          lambda o: simple(o, 'STRETCH', 0.35, 'Z')], "stack")
+    case("three_artists_spider", "spider",
+         [lambda o: detail(o, SPIDER["a"], 0.2, 0.03, 24),
+          lambda o: grab(o, SPIDER["top"], tuple(c + d for c, d in zip(SPIDER["top"], (0.0, 0.05, 0.12))), 0.35),
+          lambda o: detail(o, SPIDER["c"], 0.2, 0.03, 25)], "stack")
+    case("twist3_capsule", "capsule",
+         [lambda o: detail(o, (0.4, 0, 0.9), 0.3, 0.05, 26),
+          lambda o: detail(o, (-0.4, 0, -0.9), 0.3, 0.05, 27),
+          lambda o: twist(o, math.radians(70), 'Z')], "stack")
+elif which == "probe":
+    for kind in sys.argv[sys.argv.index("--") + 3:]:
+        o = base_object(kind); base, faces = snapshot(o); rep = coincident(base)
+        print("PROBE", kind, len(base), "vertices", len(faces), "faces", parts(len(base), faces, list(range(len(base)))),
+              "parts", parts(len(base), faces, rep), "welded parts", sum(r != i for i, r in enumerate(rep)), "coincident extra")
+        for k, v in LM.items(): print("PROBE   ", k, tuple(round(c, 3) for c in v[0]), tuple(round(c, 2) for c in v[1]))
+elif which == "held":
+    # many-part meshes
+    case("cast_plus_detail_wuson", "wuson",
+         [lambda o: detail(o, at("+y"), 0.25, 0.04, 31),
+          lambda o: cast(o, 0.4)], "stack", details=[0])
+    case("grab_plus_detail_engine_shipped", "engine_shipped",
+         [lambda o: detail_along(o, near(o, (-0.11, 0.54, 0.01))[0], 0.25, 0.05, 32, 'Y'),
+          lambda o: grab(o, (-0.11, 0.5, 0.0), (-0.05, 0.65, 0.1), 0.45)],
+         "stack", details=[0])
+    case("disjoint_spider_shipped", "spider_shipped",
+         [lambda o: detail_along(o, at("+y"), 0.3, 0.06, 33, 'Y'),
+          lambda o: grab(o, at("-y"), at("-y", 1, (0, -0.1, 0.1)), 0.35)], "stack", details=[0])
+    case("cast_plus_detail_wuson_shipped", "wuson_shipped",
+         [lambda o: detail_along(o, at("+z"), 0.25, 0.04, 34, 'Z'),
+          lambda o: cast(o, 0.35)], "stack", details=[0])
+    case("three_artists_mocap", "mocap",
+         [lambda o: detail(o, at("+x"), 0.25, 0.04, 35),
+          lambda o: detail(o, (0.465, -0.397, 0.265), 0.25, 0.04, 36),
+          lambda o: grab(o, at("+x"), at("+x", 1, (0.1, 0, 0.1)), 0.5)], "stack", details=[0, 1])
+    # a strong detail whose bumps the bend folds; a weak detail; Cast and taper on other meshes
+    case("bend_plus_strong_detail_capsule", "capsule_lo",
+         [lambda o: detail(o, (0, 0.4, 0.3), 0.35, 0.7, 38),
+          lambda o: bend(o, math.radians(170), 'X')], "stack", details=[0])
+    case("twist_plus_weak_detail_monkey", "monkey2",
+         [lambda o: detail(o, near(o, (0, -0.8, 0.4))[0], 0.3, 0.012, 39),
+          lambda o: twist(o, math.radians(60), 'Z')], "stack", details=[0])
+    case("cast_plus_detail_torus", "torus_lo",
+         [lambda o: detail(o, at("+z"), 0.3, 0.05, 40),
+          lambda o: cast(o, 0.5)], "stack", details=[0])
+    case("taper_plus_detail_cube", "cube",
+         [lambda o: detail(o, (1, 0, 0.3), 0.5, 0.06, 41),
+          lambda o: simple(o, 'TAPER', 0.7, 'Z')], "stack", details=[0])
+    # tangential details: a tiny grab, a pinch, a local twist (swirl)
+    case("bend_plus_tinygrab_capsule", "capsule_lo",
+         [lambda o: tiny_grab(o, (0, 0.4, 0.6), (0.03, 0, 0.03), 0.2),
+          lambda o: bend(o, math.radians(75), 'X')], "stack", details=[0])
+    case("grab_plus_pinch_monkey", "monkey2",
+         [lambda o: pinch(o, near(o, (0.35, -0.75, 0.45))[0], 0.25, 0.6),
+          lambda o: grab(o, (0.2, -0.6, 0.4), (0.3, -0.9, 0.6), 1.0)], "stack", details=[0])
+    case("cast_plus_swirl_monkey", "monkey2",
+         [lambda o: local_twist(o, *near(o, (0, -0.9, -0.2)), 0.25, math.radians(60)),
+          lambda o: cast(o, 0.4)], "stack", details=[0])
+    # two details and two coarse edits: each detail under one coarse edit; the two coarse
+    # edits touch disjoint regions (where they overlap, stacking them would depend on their
+    # order, which no merge of independent edits can know); a SimpleDeform with limits comes
+    # before a grab, whose lift would otherwise move the limits' bounding box
+    case("four_artists_capsule", "capsule_lo",
+         [lambda o: detail(o, (0.4, 0, 0.8), 0.3, 0.05, 42),
+          lambda o: local_twist(o, (0, 0.4, -0.6), (0, 1, 0), 0.3, math.radians(60)),
+          lambda o: simple_part(o, 'TWIST', math.radians(60), 'Z', 0.0, below=False),
+          lambda o: simple_part(o, 'BEND', math.radians(60), 'X', 0.0, below=True)], "stack", details=[0, 1])
+    case("four_artists_torus", "torus_lo",
+         [lambda o: detail(o, (1, 0, 0.3), 0.3, 0.05, 43),
+          lambda o: tiny_grab(o, (-1, 0, 0.3), (0.03, 0.03, 0), 0.25),
+          lambda o: cast_part(o, 0.5, (1.3, 0, 0), 1.2),
+          lambda o: grab(o, (-1.1, 0, 0.2), (-1.3, 0.1, 0.4), 0.6)], "stack", details=[0, 1])
+    case("four_artists_monkey", "monkey2",
+         [lambda o: detail(o, near(o, (0, -0.8, 0.4))[0], 0.3, 0.05, 44),
+          lambda o: pinch(o, near(o, (0, -0.7, -0.7))[0], 0.25, 0.6),
+          lambda o: simple_part(o, 'TWIST', math.radians(45), 'Z', -0.2, below=True),
+          lambda o: grab(o, (0.1, -0.6, 0.5), (0.15, -0.85, 0.75), 0.6)], "stack", details=[0, 1])
+    case("four_artists_wuson_shipped", "wuson_shipped",
+         [lambda o: detail_along(o, at("+z"), 0.25, 0.04, 37, 'Z'),
+          lambda o: tiny_grab(o, at("+y"), (0, 0, 0.03), 0.2),
+          lambda o: grab(o, at("+z", 0.9), at("+z", 0.9, (0.1, 0, 0.1)), 0.6),
+          lambda o: cast_part(o, 0.3, (0, 0, -0.6), 0.8)], "stack", details=[0, 1])
+    # disjoint edits, far apart and near each other
+    case("disjoint_far_torus", "torus_lo",
+         [lambda o: detail(o, (1.3, 0, 0), 0.3, 0.05, 45),
+          lambda o: grab(o, (-1.3, 0, 0), (-1.5, 0.1, 0.1), 0.4)], "stack", details=[0])
+    # the supports: within 0.2 of the detail's centre, within 0.3 of the grab's; the centres
+    # 0.65 apart on the torus' top circle (radius 1), about 3 rings of vertices between them
+    case("disjoint_near_torus", "torus_lo",
+         [lambda o: detail(o, (1, 0, 0.3), 0.2, 0.05, 46),
+          lambda o: grab(o, (math.cos(2 * math.asin(0.325)), math.sin(2 * math.asin(0.325)), 0.3),
+                         (math.cos(2 * math.asin(0.325)), math.sin(2 * math.asin(0.325)), 0.42), 0.3)],
+         "stack", details=[0])
