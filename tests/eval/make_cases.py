@@ -1,6 +1,9 @@
 # Builds merge cases from edits authored by Blender's own deformers.
-# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2]
+# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held]
 # (Debian 12: apt-get install blender assimp-testmodels). Add your own case() lines to author more.
+# public, public2: the sets of shared/eval/cases (this file began as shared/eval/make_cases.py);
+# held: tests/eval/cases (see its README.md), which also prints what each case holds;
+# probe KIND...: prints a mesh's vertex, face and part counts and landmarks.
 # Each case directory holds base.ply, a.ply, b.ply (same vertices and faces, moved
 # by two independent Blender modifier stacks) and ideal.ply where an ideal exists
 # (both stacks applied in sequence, so a detail edit rides along a coarse one).
