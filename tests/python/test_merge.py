@@ -223,11 +223,17 @@ class Merge(unittest.TestCase):
 
     def test_an_explicit_frame_is_used(self):
         s = self.s
-        fitted = self.merger.merge(s.base, [s.da, s.db])
-        framed = self.merger.merge(s.base, [s.da, s.db], frame=((0.0, 0.0, 0.0), 3.0))
-        again = self.merger.merge(s.base, [s.db, s.da], frame=((0.0, 0.0, 0.0), 3.0))
+        # the hierarchy merge weighs rotation against translation in the frame's units
+        m = "hierarchy-blend"
+        fitted = self.merger.merge(s.base, [s.da, s.db], method=m)
+        framed = self.merger.merge(s.base, [s.da, s.db], method=m, frame=((0.0, 0.0, 0.0), 3.0))
+        again = self.merger.merge(s.base, [s.db, s.da], method=m, frame=((0.0, 0.0, 0.0), 3.0))
         self.assertEqual(framed.digest, again.digest)
         self.assertNotEqual(framed.digest, fitted.digest)
+        # full carries displacements by rotations, which have no units: no frame changes it
+        full = self.merger.merge(s.base, [s.da, s.db])
+        full_framed = self.merger.merge(s.base, [s.da, s.db], frame=((0.0, 0.0, 0.0), 3.0))
+        self.assertEqual(full.digest, full_framed.digest)
         with self.assertRaisesRegex(csculpt.InvalidArgument, "frame"):
             self.merger.merge(s.base, [s.da], frame=((0, 0, 0), 0.0))
 
