@@ -39,14 +39,14 @@ double ms_since(Clock::time_point t0) {
 }
 
 constexpr std::array<MergeMethod, 9> kMethods = {MergeMethod::full,
-                                                 MergeMethod::hierarchy_blend,
                                                  MergeMethod::paper_blend,
                                                  MergeMethod::single_parent,
                                                  MergeMethod::single_level_isometry,
                                                  MergeMethod::multiscale_translation,
                                                  MergeMethod::weighted_translation,
                                                  MergeMethod::average,
-                                                 MergeMethod::sum};
+                                                 MergeMethod::sum,
+                                                 MergeMethod::hierarchy_blend};
 
 // ---------------------------------------------------------------------------------------
 // The two algebras the pipeline runs on.
