@@ -21,6 +21,9 @@ struct DemoOptions {
   /// the rebase path runs as it would for a real artist.
   double strokes_per_second = 5;
   double converge_timeout_seconds = 15;
+  /// One peer plays the scripts of all `peers` artists (the same scripts, seeds and rate a
+  /// `peers`-peer session uses) in time order: the single-peer baseline of the same strokes.
+  bool replay = false;
 };
 
 /// Runs the session; returns 0 when every peer converged with no lost edit, 1 otherwise
