@@ -366,7 +366,8 @@ CLI::App* add_demo_command(CLI::App& app, DemoOptions& o) {
       "demo",
       "a serverless session on this machine: simulated artists sculpt and paint one mesh, "
       "their edits merge every sync interval");
-  demo->add_option("--peers", o.peers, "simulated artists, one peer session each")
+  demo->add_option("--peers", o.peers,
+                   "simulated artists, one peer session each (with --replay: one for all)")
       ->capture_default_str()
       ->check(CLI::Range(1u, 32u));
   demo->add_option("--seconds", o.seconds, "editing time (syncing continues until converged)")
