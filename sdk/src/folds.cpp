@@ -61,20 +61,38 @@ Vec3d normal_after(const Mesh& base, const Diff& diff, const Triangle& t) {
                      position_after(base, diff, t[2]));
 }
 
-/// Flipped by the merge and by no single diff.
-bool is_new_fold(const Mesh& base, std::span<const Diff* const> diffs, const Diff& merged,
-                 const Triangle& t) {
-  const Vec3d n = normal_of(base, t);
-  if (!opposed(n, normal_after(base, merged, t))) return false;
+constexpr std::uint32_t kNone = 0xffffffffu;
+
+/// `base` with `merged` applied, looked up in O(1) through `slot`: per vertex, its index among
+/// merged's changed positions, or kNone.
+struct MergedView {
+  const Mesh& base;
+  const Diff& merged;
+  std::span<const std::uint32_t> slot;
+
+  bool moved(std::uint32_t v) const { return slot[v] != kNone; }
+  Vec3d position(std::uint32_t v) const {
+    return moved(v) ? changed_position(merged, slot[v]) : widen(base.positions[v]);
+  }
+  Vec3d normal(const Triangle& t) const {
+    return face_normal(position(t[0]), position(t[1]), position(t[2]));
+  }
+};
+
+/// Flipped by the merge and by no single diff. The diffs are searched only for faces the merge
+/// flipped, which are few.
+bool is_new_fold(const MergedView& m, std::span<const Diff* const> diffs, const Triangle& t) {
+  const Vec3d n = normal_of(m.base, t);
+  if (!opposed(n, m.normal(t))) return false;
   return std::none_of(diffs.begin(), diffs.end(),
-                      [&](const Diff* d) { return opposed(n, normal_after(base, *d, t)); });
+                      [&](const Diff* d) { return opposed(n, normal_after(m.base, *d, t)); });
 }
 
-/// The first vertex of `t` (in increasing index) that `merged` moved, or none: a face around
-/// several moved vertices is visited from each of them and counted from this one only.
-bool first_moved_is(const Diff& merged, const Triangle& t, std::uint32_t v) {
+/// Whether `v` is the lowest vertex of `t` that the merge moved: a face around several moved
+/// vertices is visited from each and counted from that one only.
+bool first_moved_is(const MergedView& m, const Triangle& t, std::uint32_t v) {
   for (std::uint32_t u : t)
-    if (u < v && find_changed(merged, u) >= 0) return false;
+    if (u < v && m.moved(u)) return false;
   return true;
 }
 
@@ -89,30 +107,50 @@ void check_vertex_counts(const Mesh& base, std::span<const Diff* const> diffs, c
                        std::to_string(n) + " vertices");
 }
 
+/// Sets (or, with `clear`, resets) the slots of merged's changed positions.
+void mark(std::vector<std::uint32_t>& slot, const Diff& merged, bool clear) {
+  const std::vector<std::uint32_t>& indices = merged.positions.indices;
+  for (std::uint32_t i = 0; i < indices.size(); ++i) slot[indices[i]] = clear ? kNone : i;
+}
+
 }  // namespace
+
+FoldCounter::FoldCounter(const Topology& topology)
+    : topology_(&topology), slot_(topology.vertex_count, kNone) {}
+
+std::uint32_t FoldCounter::count_new_folds(const Mesh& base, std::span<const Diff* const> diffs,
+                                           const Diff& merged) {
+  check_vertex_counts(base, diffs, merged);
+  if (topology_->vertex_count != base.vertex_count() ||
+      topology_->triangles.size() != base.face_count())
+    throw InvalidInput("count_new_folds: the topology is not the base's");
+  mark(slot_, merged, false);
+  const MergedView view{base, merged, slot_};
+  std::uint32_t folds = 0;
+  for (std::uint32_t v : merged.positions.indices)
+    for (std::uint32_t f : topology_->vertex_faces.row(v)) {
+      const Triangle& t = base.triangles[f];
+      if (first_moved_is(view, t, v) && is_new_fold(view, diffs, t)) ++folds;
+    }
+  mark(slot_, merged, true);  // all kNone again for the next call
+  return folds;
+}
 
 std::uint32_t count_new_folds(const Topology& topology, const Mesh& base,
                               std::span<const Diff* const> diffs, const Diff& merged) {
-  check_vertex_counts(base, diffs, merged);
-  if (topology.vertex_count != base.vertex_count())
-    throw InvalidInput("count_new_folds: the topology is not the base's");
-  std::uint32_t folds = 0;
-  for (std::uint32_t v : merged.positions.indices)
-    for (std::uint32_t f : topology.vertex_faces.row(v)) {
-      const Triangle& t = base.triangles[f];
-      if (first_moved_is(merged, t, v) && is_new_fold(base, diffs, merged, t)) ++folds;
-    }
-  return folds;
+  return FoldCounter(topology).count_new_folds(base, diffs, merged);
 }
 
 std::uint32_t count_new_folds(const Mesh& base, std::span<const Diff* const> diffs,
                               const Diff& merged) {
   check_vertex_counts(base, diffs, merged);
-  std::vector<bool> moved(base.vertex_count(), false);
-  for (std::uint32_t v : merged.positions.indices) moved[v] = true;
+  std::vector<std::uint32_t> slot(base.vertex_count(), kNone);
+  mark(slot, merged, false);
+  const MergedView view{base, merged, slot};
   std::uint32_t folds = 0;
   for (const Triangle& t : base.triangles)
-    if ((moved[t[0]] || moved[t[1]] || moved[t[2]]) && is_new_fold(base, diffs, merged, t)) ++folds;
+    if ((view.moved(t[0]) || view.moved(t[1]) || view.moved(t[2])) && is_new_fold(view, diffs, t))
+      ++folds;
   return folds;
 }
 

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "csculpt/diff.h"
+#include "csculpt/error.h"
 #include "csculpt/folds.h"
 #include "csculpt/generate.h"
 #include "csculpt/hierarchy.h"
@@ -42,6 +43,9 @@ std::uint32_t both_overloads(const Mesh& base, const std::vector<const Diff*>& d
       Topology::build(static_cast<std::uint32_t>(base.vertex_count()), base.triangles);
   const std::uint32_t sparse = count_new_folds(topology, base, diffs, merged);
   EXPECT_EQ(sparse, count_new_folds(base, diffs, merged)) << "the overloads disagree";
+  FoldCounter counter(topology);
+  EXPECT_EQ(counter.count_new_folds(base, diffs, merged), sparse);
+  EXPECT_EQ(counter.count_new_folds(base, diffs, merged), sparse) << "a reused counter";
   return sparse;
 }
 
@@ -113,16 +117,34 @@ TEST(Folds, SparseCountsEqualTheDenseDefinitionOnRandomEdits) {
     }
     return m;
   };
+  // one counter over every round, as a session's merger keeps one
+  const Topology topology =
+      Topology::build(static_cast<std::uint32_t>(base.vertex_count()), base.triangles);
+  FoldCounter session_counter(topology);
   std::uint32_t total = 0;
   for (int round = 0; round < 20; ++round) {
     const std::vector<Mesh> edits = {random_edit(150), random_edit(150)};
     const Mesh result = random_edit(300);
     const Diff da = capture_diff(base, edits[0]), db = capture_diff(base, edits[1]);
+    const Diff merged = capture_diff(base, result);
     const std::uint32_t expected = reference_new_folds(base, edits, result);
-    EXPECT_EQ(both_overloads(base, {&da, &db}, capture_diff(base, result)), expected) << round;
+    EXPECT_EQ(both_overloads(base, {&da, &db}, merged), expected) << round;
+    const std::vector<const Diff*> diffs = {&da, &db};
+    EXPECT_EQ(session_counter.count_new_folds(base, diffs, merged), expected) << round;
     total += expected;
   }
   EXPECT_GT(total, 0u) << "the edits should flip some faces";
+}
+
+TEST(Folds, AMismatchedTopologyOrDiffIsRefused) {
+  const Mesh base = three_triangles();
+  const Mesh other = make_sphere(200);
+  const Topology topology =
+      Topology::build(static_cast<std::uint32_t>(other.vertex_count()), other.triangles);
+  const Diff merged = capture_diff(base, moved(base, {{5, {3, -1, 0}}}));
+  EXPECT_THROW(FoldCounter(topology).count_new_folds(base, {}, merged), InvalidInput);
+  const Diff past = capture_diff(other, moved(other, {{100, {0, 0, 0}}}));
+  EXPECT_THROW(count_new_folds(base, {}, past), InvalidInput);
 }
 
 TEST(Folds, OpposedFacePairsAreCreasesAcrossAnEdge) {

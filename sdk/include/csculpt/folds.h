@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <span>
+#include <vector>
 
 #include "csculpt/diff.h"
 #include "csculpt/hierarchy.h"
@@ -17,18 +18,34 @@
 
 namespace csculpt {
 
-/// New folds of a merge: faces flipped from `base` to `base + merged` but by none of `diffs`
-/// (each applied to `base` on its own) — creases or spikes no artist made.
-///
-/// Sparse: only faces around the vertices whose position `merged` changes are looked at (a
-/// face none of whose vertices moved cannot flip), found through `topology.vertex_faces`;
-/// positions are looked up in the diffs by binary search. No allocation, so it can run after
-/// every session merge. `topology` must be the one of `base`'s triangles.
+/// Counts the new folds of merges on one mesh, reusing its workspace: what a session's merger
+/// runs after every merge.
+class FoldCounter {
+ public:
+  /// `topology` (of the base's triangles, e.g. a Hierarchy's) must outlive the counter.
+  explicit FoldCounter(const Topology& topology);
+
+  /// New folds of a merge: faces flipped from `base` to `base + merged` but by none of
+  /// `diffs` (each applied to `base` on its own) — creases or spikes no artist made.
+  ///
+  /// Sparse: only faces around the vertices whose position `merged` changes are looked at (a
+  /// face none of whose vertices moved cannot flip), found through `topology.vertex_faces`,
+  /// with merged positions found in O(1) through a per-vertex slot array kept between calls;
+  /// the diffs are searched only for the faces the merge flipped. No allocation. Throws
+  /// InvalidInput when `base` is not the topology's mesh or a diff indexes past it.
+  std::uint32_t count_new_folds(const Mesh& base, std::span<const Diff* const> diffs,
+                                const Diff& merged);
+
+ private:
+  const Topology* topology_;
+  std::vector<std::uint32_t>
+      slot_;  ///< per vertex: index among merged's changes; none between calls
+};
+
+/// One-off forms of FoldCounter::count_new_folds: with a topology (allocates the slot array),
+/// or without (one pass over the triangles).
 std::uint32_t count_new_folds(const Topology& topology, const Mesh& base,
                               std::span<const Diff* const> diffs, const Diff& merged);
-
-/// The same without a topology: one pass over the triangles (and one bitmap of the vertices
-/// `merged` moved). For one-off use; a session keeps a Topology and calls the overload above.
 std::uint32_t count_new_folds(const Mesh& base, std::span<const Diff* const> diffs,
                               const Diff& merged);
 
