@@ -143,7 +143,7 @@ TEST(Folds, AMismatchedTopologyOrDiffIsRefused) {
       Topology::build(static_cast<std::uint32_t>(other.vertex_count()), other.triangles);
   const Diff merged = capture_diff(base, moved(base, {{5, {3, -1, 0}}}));
   EXPECT_THROW(FoldCounter(topology).count_new_folds(base, {}, merged), InvalidInput);
-  const Diff past = capture_diff(other, moved(other, {{100, {0, 0, 0}}}));
+  const Diff past = capture_diff(other, moved(other, {{50, {0, 0, 0}}}));
   EXPECT_THROW(count_new_folds(base, {}, past), InvalidInput);
 }
 
