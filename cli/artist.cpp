@@ -1,6 +1,25 @@
 #include "artist.h"
 
 namespace csculpt::cli {
+namespace {
+
+constexpr std::uint32_t kScriptLength = 4096;  ///< strokes per script; played in a loop
+
+/// The artist's script: its own, or the replayed artists' scripts interleaved stroke by stroke
+/// (their strokes are due at the same times, so this is their time order).
+std::vector<Stroke> make_script(const Mesh& base, const ArtistOptions& o) {
+  if (o.replayed_seeds.empty()) return scripted_strokes(base, o.seed, kScriptLength, o.paint);
+  std::vector<std::vector<Stroke>> scripts;
+  for (std::uint64_t seed : o.replayed_seeds)
+    scripts.push_back(scripted_strokes(base, seed, kScriptLength, o.paint));
+  std::vector<Stroke> interleaved;
+  interleaved.reserve(std::size_t{kScriptLength} * scripts.size());
+  for (std::uint32_t i = 0; i < kScriptLength; ++i)
+    for (const std::vector<Stroke>& script : scripts) interleaved.push_back(script[i]);
+  return interleaved;
+}
+
+}  // namespace
 
 SimulatedArtist::SimulatedArtist(peer::Session& session, const ArtistOptions& options)
     : session_(session),
@@ -8,7 +27,11 @@ SimulatedArtist::SimulatedArtist(peer::Session& session, const ArtistOptions& op
       local_(session.base()),
       topology_(
           Topology::build(static_cast<std::uint32_t>(local_.vertex_count()), local_.triangles)),
-      script_(scripted_strokes(session.base(), options.seed, 4096, options.paint)) {}
+      script_(make_script(session.base(), options)) {}
+
+std::size_t SimulatedArtist::scripts() const {
+  return options_.replayed_seeds.empty() ? 1 : options_.replayed_seeds.size();
+}
 
 bool SimulatedArtist::stroke() {
   const Stroke& s = script_[cursor_++ % script_.size()];
@@ -31,11 +54,12 @@ std::size_t SimulatedArtist::step(peer::Clock::time_point now, bool editing) {
   }
   const std::size_t applied = session_.update(local_);
   if (editing && options_.strokes_per_second > 0) {
-    const double due =
-        std::chrono::duration<double>(now - started_).count() * options_.strokes_per_second;
+    const double rate = options_.strokes_per_second * static_cast<double>(scripts());
+    const double due = std::chrono::duration<double>(now - started_).count() * rate;
     // Strokes that changed nothing (paint on a mesh without material channels) are skipped;
     // the cap keeps a long stall from bursting.
-    for (int i = 0; i < 64 && static_cast<double>(strokes_) < due; ++i) stroke();
+    const std::size_t cap = 64 * scripts();
+    for (std::size_t i = 0; i < cap && static_cast<double>(strokes_) < due; ++i) stroke();
   }
   if (now >= next_submit_) {
     next_submit_ = now + options_.submit_every;

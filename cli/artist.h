@@ -16,6 +16,11 @@ namespace csculpt::cli {
 
 struct ArtistOptions {
   std::uint64_t seed = 1;
+  /// When not empty, the artist plays these artists' scripts instead of `seed`'s, all at once
+  /// and in time order: stroke i of each (in this order), then stroke i + 1 of each, so
+  /// `strokes_per_second` strokes of every script per second. One peer replaying the scripts
+  /// of a session's artists is that session's single-peer baseline (`csculpt demo --replay`).
+  std::vector<std::uint64_t> replayed_seeds;
   double strokes_per_second = 4;
   bool paint = true;
   /// How often the edit is submitted (the session's sync interval is a good choice).
@@ -35,6 +40,9 @@ class SimulatedArtist {
   /// Applies the next scripted stroke now (counted); false when it was skipped (paint on a
   /// mesh without the material channels).
   bool stroke();
+
+  /// How many scripts the artist plays (1, or the number of replayed seeds).
+  std::size_t scripts() const;
 
   Mesh& local() { return local_; }
   std::uint32_t strokes() const { return strokes_; }

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "artist.h"
+#include "csculpt/folds.h"
 #include "csculpt/generate.h"
 #include "csculpt/io.h"
 #include "csculpt/peer/session.h"
@@ -61,6 +62,26 @@ std::string peer_name(std::uint32_t k) {
   return k < 26 ? std::string(1, static_cast<char>('A' + k)) : "P" + std::to_string(k + 1);
 }
 
+/// Artist k's stroke seed: a --replay run plays exactly the scripts a session would.
+std::uint64_t artist_seed(const DemoOptions& o, std::uint32_t k) {
+  return o.seed * 7919 + k;
+}
+
+/// Peer sessions the demo runs: one per artist, or one for all of them with --replay.
+std::uint32_t session_count(const DemoOptions& o) {
+  return o.replay ? 1 : o.peers;
+}
+
+ArtistOptions artist_options(const DemoOptions& o, std::uint32_t k) {
+  ArtistOptions ao;
+  ao.seed = artist_seed(o, k);
+  if (o.replay)
+    for (std::uint32_t j = 0; j < o.peers; ++j) ao.replayed_seeds.push_back(artist_seed(o, j));
+  ao.strokes_per_second = o.strokes_per_second;
+  ao.submit_every = Millis{o.sync_ms};
+  return ao;
+}
+
 peer::SessionOptions session_options(const DemoOptions& o, std::uint32_t k) {
   peer::SessionOptions s;
   s.id = k + 1;  // the lowest id merges: A, whose attribution hue is green
@@ -73,11 +94,7 @@ peer::SessionOptions session_options(const DemoOptions& o, std::uint32_t k) {
 /// has stopped, the digests the main thread compares for convergence.
 void artist_loop(Peer& p, const DemoOptions& o, std::uint32_t k, const std::atomic<int>& phase) {
   try {
-    ArtistOptions ao;
-    ao.seed = o.seed * 7919 + k;
-    ao.strokes_per_second = o.strokes_per_second;
-    ao.submit_every = Millis{o.sync_ms};
-    p.artist = std::make_unique<SimulatedArtist>(*p.session, ao);
+    p.artist = std::make_unique<SimulatedArtist>(*p.session, artist_options(o, k));
     {
       std::lock_guard lock(p.mutex);
       p.published.ready = true;
@@ -129,39 +146,101 @@ bool all_converged(const std::vector<Published>& s) {
   return true;
 }
 
+/// The JSON summary's numbers, over every peer once the artist threads are done.
+struct Summary {
+  std::uint64_t strokes = 0, merges = 0, conflicting = 0, submit_bytes = 0, lost = 0,
+                version_bytes = 0, rebases = 0, dropped = 0, version = 0;
+  /// Summed over peers: each counts the merges it made, so this is every merge's (the
+  /// merger's alone unless the election moved).
+  std::uint64_t folds_introduced = 0;
+  std::uint32_t opposed_face_pairs = 0;  ///< on the final mesh
+  double merge_sum = 0, merge_max = 0;
+  bool converged = false;
+  double converge_s = 0, setup_s = 0, wall_s = 0;
+};
+
+Summary gather_summary(const std::vector<std::unique_ptr<Peer>>& peers) {
+  Summary s;
+  for (const auto& p : peers) {
+    const peer::SessionStats st = p->session->stats();
+    if (p->artist) {
+      s.strokes += p->artist->strokes();
+      s.lost += p->artist->unacknowledged();
+    }
+    s.merges += st.merges;
+    s.conflicting += st.conflicting_strokes;
+    s.submit_bytes += st.submit_bytes;
+    s.version_bytes += st.version_bytes_sent;
+    s.rebases += st.rebases;
+    s.dropped += st.messages_dropped;
+    s.folds_introduced += st.folds_introduced;
+    s.merge_sum += st.merge_ms_sum;
+    s.merge_max = std::max(s.merge_max, st.merge_ms_max);
+  }
+  return s;
+}
+
+double ratio(double a, std::uint64_t b) {
+  return b ? a / static_cast<double>(b) : 0.0;
+}
+
+void print_summary(const DemoOptions& o, const Mesh& sphere, const Summary& s) {
+  using ull = unsigned long long;
+  std::printf(
+      "{\"peers\":%u,\"artists\":%u,\"replay\":%s,\"faces\":%zu,\"vertices\":%zu,"
+      "\"sync_ms\":%u,\"seconds\":%.1f,\"strokes\":%llu,\"merges\":%llu,\"version\":%llu,"
+      "\"merge_ms_mean\":%.3f,\"merge_ms_max\":%.3f,\"bytes_per_stroke\":%.0f,"
+      "\"submit_bytes\":%llu,\"version_bytes\":%llu,\"conflicting_edits\":%llu,"
+      "\"conflicting_fraction\":%.3f,\"folds_introduced\":%llu,\"opposed_face_pairs\":%u,"
+      "\"rebases\":%llu,\"messages_dropped\":%llu,\"converged\":%s,\"converge_s\":%.3f,"
+      "\"lost_edits\":%llu,\"setup_s\":%.2f,\"wall_s\":%.2f,\"out\":\"%s\"}\n",
+      session_count(o), o.peers, o.replay ? "true" : "false", sphere.face_count(),
+      sphere.vertex_count(), o.sync_ms, o.seconds, ull(s.strokes), ull(s.merges), ull(s.version),
+      ratio(s.merge_sum, s.merges), s.merge_max,
+      ratio(static_cast<double>(s.submit_bytes), s.strokes), ull(s.submit_bytes),
+      ull(s.version_bytes), ull(s.conflicting),
+      ratio(static_cast<double>(s.conflicting), s.strokes), ull(s.folds_introduced),
+      s.opposed_face_pairs, ull(s.rebases), ull(s.dropped), s.converged ? "true" : "false",
+      s.converge_s, ull(s.lost), s.setup_s, s.wall_s, o.out.c_str());
+  std::fflush(stdout);
+}
+
 }  // namespace
 
 int run_demo(const DemoOptions& o) {
   const auto t_start = Clock::now();
   const Mesh sphere = make_sphere(o.faces, /*materials=*/true);
   const std::size_t n = sphere.vertex_count();
+  const std::uint32_t sessions = session_count(o);
   std::vector<std::unique_ptr<Peer>> peers;
-  for (std::uint32_t k = 0; k < o.peers; ++k) peers.push_back(std::make_unique<Peer>());
+  for (std::uint32_t k = 0; k < sessions; ++k) peers.push_back(std::make_unique<Peer>());
 
   // A creates the session; the others join with its invite (snapshot, then each builds the
   // merge hierarchy for itself).
   peers[0]->session = peer::Session::create(sphere, session_options(o, 0));
   const std::string invite = peers[0]->session->invite();
-  for (std::uint32_t k = 1; k < o.peers; ++k)
+  for (std::uint32_t k = 1; k < sessions; ++k)
     peers[k]->session = peer::Session::join(invite, session_options(o, k));
   // Until the artist threads start, this thread is every session's host: wait until everyone
   // knows everyone (heartbeats spread membership), so the first submits reach the merger.
   const auto members_deadline = Clock::now() + Millis{10000};
   while (Clock::now() < members_deadline) {
     bool all = true;
-    for (const auto& p : peers) all &= p->session->stats().members == o.peers;
+    for (const auto& p : peers) all &= p->session->stats().members == sessions;
     if (all) break;
     std::this_thread::sleep_for(Millis{5});
   }
   const double setup_s = seconds_between(t_start, Clock::now());
+  const std::string replaying =
+      o.replay ? " replaying " + std::to_string(o.peers) + " artists' scripts" : "";
   std::fprintf(stderr,
-               "session: %u peers on a %zu-face sphere (%zu vertices), sync every %u ms, "
+               "session: %u peers%s on a %zu-face sphere (%zu vertices), sync every %u ms, "
                "joined in %.2f s; invite %s\n",
-               o.peers, sphere.face_count(), n, o.sync_ms, setup_s,
+               sessions, replaying.c_str(), sphere.face_count(), n, o.sync_ms, setup_s,
                invite.substr(0, invite.find(':') + 9).c_str());
 
   std::atomic<int> phase{static_cast<int>(Phase::setup)};
-  for (std::uint32_t k = 0; k < o.peers; ++k)
+  for (std::uint32_t k = 0; k < sessions; ++k)
     peers[k]->thread =
         std::thread(artist_loop, std::ref(*peers[k]), std::cref(o), k, std::cref(phase));
   auto published = [&] {
@@ -181,18 +260,18 @@ int run_demo(const DemoOptions& o) {
   phase = static_cast<int>(Phase::editing);
 
   // Live merge lines: whichever peer merges (the election may move it), from its counters.
-  std::vector<peer::SessionStats> last(o.peers);
+  std::vector<peer::SessionStats> last(sessions);
   std::uint64_t printed_version = 0;
   auto report_merges = [&](const std::vector<Published>& s) {
     std::uint64_t submits = 0, submit_bytes = 0, last_submits = 0, last_submit_bytes = 0;
-    for (std::uint32_t k = 0; k < o.peers; ++k) {
+    for (std::uint32_t k = 0; k < sessions; ++k) {
       submits += s[k].stats.submits;
       submit_bytes += s[k].stats.submit_bytes;
       last_submits += last[k].submits;
       last_submit_bytes += last[k].submit_bytes;
     }
     bool printed = false;
-    for (std::uint32_t k = 0; k < o.peers; ++k) {
+    for (std::uint32_t k = 0; k < sessions; ++k) {
       const peer::SessionStats& now = s[k].stats;
       const peer::SessionStats& before = last[k];
       if (now.merges <= before.merges) continue;
@@ -219,12 +298,12 @@ int run_demo(const DemoOptions& o) {
       printed = true;
     }
     if (printed)
-      for (std::uint32_t k = 0; k < o.peers; ++k) last[k] = s[k].stats;
+      for (std::uint32_t k = 0; k < sessions; ++k) last[k] = s[k].stats;
   };
 
   std::string error;
   auto check_errors = [&](const std::vector<Published>& s) {
-    for (std::uint32_t k = 0; k < o.peers && error.empty(); ++k)
+    for (std::uint32_t k = 0; k < sessions && error.empty(); ++k)
       if (!s[k].error.empty()) error = peer_name(k) + ": " + s[k].error;
     return error.empty();
   };
@@ -258,58 +337,28 @@ int run_demo(const DemoOptions& o) {
   report_merges(published());
 
   // The artist threads are done: this thread is every session's host again.
-  std::uint64_t strokes = 0, merges = 0, conflicting = 0, submit_bytes = 0, lost = 0,
-                version_bytes = 0, rebases = 0, dropped = 0;
-  double merge_sum = 0, merge_max = 0;
-  for (const auto& p : peers) {
-    const peer::SessionStats st = p->session->stats();
-    if (p->artist) {
-      strokes += p->artist->strokes();
-      lost += p->artist->unacknowledged();
-    }
-    merges += st.merges;
-    conflicting += st.conflicting_strokes;
-    submit_bytes += st.submit_bytes;
-    version_bytes += st.version_bytes_sent;
-    rebases += st.rebases;
-    dropped += st.messages_dropped;
-    merge_sum += st.merge_ms_sum;
-    merge_max = std::max(merge_max, st.merge_ms_max);
-  }
+  Summary sum = gather_summary(peers);
   const peer::Session& first = *peers[0]->session;
   Mesh final_mesh = peers[0]->artist ? peers[0]->artist->local() : first.base();
+  sum.opposed_face_pairs = count_opposed_face_pairs(final_mesh);
   const ChannelDesc attribution{"attribution", 3, Linearisation::identity, 0.f, 1.f};
   const int index = final_mesh.add_channel(attribution);
   final_mesh.channels[static_cast<std::size_t>(index)].values =
       peer::attribution_colours(first.attribution(), n);
   write_mesh(final_mesh, o.out);
-  const std::uint64_t version = first.version();
+  sum.version = first.version();
   for (auto& p : peers) p->artist.reset();
   for (auto& p : peers) p->session.reset();  // leave
 
   if (!error.empty()) std::fprintf(stderr, "csculpt: error: %s\n", error.c_str());
   std::fprintf(stderr, "%s after %.2f s of syncing; final mesh in %s\n",
                converged ? "converged" : "NOT converged", converge_s, o.out.c_str());
-  std::printf(
-      "{\"peers\":%u,\"faces\":%zu,\"vertices\":%zu,\"sync_ms\":%u,\"seconds\":%.1f,"
-      "\"strokes\":%llu,\"merges\":%llu,\"version\":%llu,\"merge_ms_mean\":%.3f,"
-      "\"merge_ms_max\":%.3f,\"bytes_per_stroke\":%.0f,\"submit_bytes\":%llu,"
-      "\"version_bytes\":%llu,\"conflicting_edits\":%llu,\"conflicting_fraction\":%.3f,"
-      "\"rebases\":%llu,\"messages_dropped\":%llu,\"converged\":%s,\"converge_s\":%.3f,"
-      "\"lost_edits\":%llu,\"setup_s\":%.2f,\"wall_s\":%.2f,\"out\":\"%s\"}\n",
-      o.peers, sphere.face_count(), n, o.sync_ms, o.seconds,
-      static_cast<unsigned long long>(strokes), static_cast<unsigned long long>(merges),
-      static_cast<unsigned long long>(version),
-      merges ? merge_sum / static_cast<double>(merges) : 0.0, merge_max,
-      strokes ? static_cast<double>(submit_bytes) / static_cast<double>(strokes) : 0.0,
-      static_cast<unsigned long long>(submit_bytes), static_cast<unsigned long long>(version_bytes),
-      static_cast<unsigned long long>(conflicting),
-      strokes ? static_cast<double>(conflicting) / static_cast<double>(strokes) : 0.0,
-      static_cast<unsigned long long>(rebases), static_cast<unsigned long long>(dropped),
-      converged ? "true" : "false", converge_s, static_cast<unsigned long long>(lost), setup_s,
-      seconds_between(t_start, Clock::now()), o.out.c_str());
-  std::fflush(stdout);
-  return converged && lost == 0 && error.empty() ? 0 : 1;
+  sum.converged = converged;
+  sum.converge_s = converge_s;
+  sum.setup_s = setup_s;
+  sum.wall_s = seconds_between(t_start, Clock::now());
+  print_summary(o, sphere, sum);
+  return converged && sum.lost == 0 && error.empty() ? 0 : 1;
 }
 
 CLI::App* add_demo_command(CLI::App& app, DemoOptions& o) {
@@ -317,7 +366,8 @@ CLI::App* add_demo_command(CLI::App& app, DemoOptions& o) {
       "demo",
       "a serverless session on this machine: simulated artists sculpt and paint one mesh, "
       "their edits merge every sync interval");
-  demo->add_option("--peers", o.peers, "simulated artists, one peer session each")
+  demo->add_option("--peers", o.peers,
+                   "simulated artists, one peer session each (with --replay: one for all)")
       ->capture_default_str()
       ->check(CLI::Range(1u, 32u));
   demo->add_option("--seconds", o.seconds, "editing time (syncing continues until converged)")
@@ -339,6 +389,9 @@ CLI::App* add_demo_command(CLI::App& app, DemoOptions& o) {
   demo->add_option("-o,--out", o.out, "final mesh (PLY with materials and attribution colours)")
       ->capture_default_str();
   demo->add_option("--seed", o.seed, "stroke seed")->capture_default_str();
+  demo->add_flag("--replay", o.replay,
+                 "one peer plays all --peers artists' scripts (same seeds and rate) in time "
+                 "order: the single-peer baseline of the same strokes, same JSON summary");
   return demo;
 }
 

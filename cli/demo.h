@@ -3,6 +3,8 @@
 // sockets, sculpt and paint a built-in sphere at the same time; the elected merger merges their
 // edits every sync interval. One line per merge on stderr, a JSON summary as the last line on
 // stdout, and the final mesh with materials and attribution colours (the paper's Fig. 1).
+// With --replay, one peer plays every artist's script: the single-peer baseline of the same
+// strokes, with the same summary (fold-overs included) to compare against.
 #pragma once
 #include <CLI/CLI.hpp>
 #include <cstdint>
@@ -21,6 +23,9 @@ struct DemoOptions {
   /// the rebase path runs as it would for a real artist.
   double strokes_per_second = 5;
   double converge_timeout_seconds = 15;
+  /// One peer plays the scripts of all `peers` artists (the same scripts, seeds and rate a
+  /// `peers`-peer session uses) in time order: the single-peer baseline of the same strokes.
+  bool replay = false;
 };
 
 /// Runs the session; returns 0 when every peer converged with no lost edit, 1 otherwise

@@ -16,27 +16,35 @@
 #include "csculpt/merge.h"
 #include "csculpt/scenarios.h"
 #include "demo.h"
+#include "explain.h"
 #include "peer_command.h"
 
 namespace {
 
 using namespace csculpt;
 
-int run_merge(const std::string& base_path, const std::vector<std::string>& edit_paths,
-              const std::string& out, const std::string& method_name, std::uint32_t k) {
-  const MergeMethod method = merge_method_from_string(method_name);
-  const Mesh base = read_mesh(base_path);
+struct MergeCommand {
+  std::string base, out, method = "full";
+  std::vector<std::string> edits;
+  std::uint32_t k = 7;
+  bool explain = false;
+  std::vector<std::string> ideals;
+};
+
+int run_merge(const MergeCommand& c) {
+  const MergeMethod method = merge_method_from_string(c.method);
+  const Mesh base = read_mesh(c.base);
   std::vector<Diff> diffs;
-  for (const std::string& path : edit_paths) {
+  for (const std::string& path : c.edits) {
     const Mesh edit = read_mesh(path);
     try {
       diffs.push_back(capture_diff(base, edit));
     } catch (const InvalidInput& e) {
-      throw InvalidInput(path + ": " + e.what() + " (compared with " + base_path + ")");
+      throw InvalidInput(path + ": " + e.what() + " (compared with " + c.base + ")");
     }
   }
   HierarchyOptions options;
-  options.max_parents = k;
+  options.max_parents = c.k;
   const Hierarchy hierarchy = Hierarchy::build(base, options);
   Merger merger(hierarchy);
   const auto t0 = std::chrono::steady_clock::now();
@@ -45,9 +53,15 @@ int run_merge(const std::string& base_path, const std::vector<std::string>& edit
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   Mesh result = base;
   apply_diff(merged, result);
-  write_mesh(result, out);
+  // Before writing: a bad --ideal fails the command without leaving an output behind.
+  const std::string explanation =
+      c.explain ? csculpt::cli::explain_merge(
+                      {base, c.edits, diffs, merged, result, hierarchy, method, c.ideals})
+                : "";
+  write_mesh(result, c.out);
   std::fprintf(stderr, "merged %zu edits of %zu vertices with %s in %.2f ms -> %s\n", diffs.size(),
-               base.vertex_count(), std::string(to_string(method)).c_str(), ms, out.c_str());
+               base.vertex_count(), std::string(to_string(method)).c_str(), ms, c.out.c_str());
+  if (c.explain) std::printf("%s\n", explanation.c_str());
   return 0;
 }
 
@@ -133,25 +147,35 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", "csculpt 0.1.0");
 
-  std::string base, out, method = "full", edited;
-  std::vector<std::string> edits;
+  std::string base, edited;
   std::uint32_t k = 7;
 
+  MergeCommand mc;
   auto* merge = app.add_subcommand("merge", "N-way merge of edits of BASE into OUT");
-  merge->add_option("base", base, "the last agreed mesh")->required()->check(CLI::ExistingFile);
-  merge->add_option("edits", edits, "two or more edited meshes (same connectivity)")
+  merge->add_option("base", mc.base, "the last agreed mesh")->required()->check(CLI::ExistingFile);
+  merge->add_option("edits", mc.edits, "two or more edited meshes (same connectivity)")
       ->required()
       ->expected(2, -1)
       ->check(CLI::ExistingFile);
-  merge->add_option("-o,--out", out, "merged mesh to write (.ply or .obj)")->required();
+  merge->add_option("-o,--out", mc.out, "merged mesh to write (.ply or .obj)")->required();
   merge
-      ->add_option("--method", method,
+      ->add_option("--method", mc.method,
                    "full, single-parent, single-level-isometry, multiscale-translation, "
                    "weighted-translation, average, sum")
       ->capture_default_str();
-  merge->add_option("--k", k, "blended parents per node (paper: 7)")
+  merge->add_option("--k", mc.k, "blended parents per node (paper: 7)")
       ->capture_default_str()
       ->check(CLI::Range(1, 32));
+  CLI::Option* explain = merge->add_flag(
+      "--explain", mc.explain,
+      "print a JSON diagnosis of the merge: each edit's support and size, new folds, and with "
+      "--ideal the error per artist, per part of the mesh, per hierarchy level, worst vertices");
+  merge
+      ->add_option("--ideal", mc.ideals,
+                   "a mesh the merge should have given (same vertices), scored as "
+                   "shared/eval/score_merge.py does; repeatable")
+      ->check(CLI::ExistingFile)
+      ->needs(explain);
 
   auto* hierarchy = app.add_subcommand("hierarchy", "hierarchy statistics of MESH (JSON)");
   std::string mesh_path;
@@ -227,7 +251,7 @@ int main(int argc, char** argv) {
 
   CLI11_PARSE(app, argc, argv);
   try {
-    if (*merge) return run_merge(base, edits, out, method, k);
+    if (*merge) return run_merge(mc);
     if (*hierarchy) return run_hierarchy(mesh_path, k);
     if (*diff) return run_diff(base, edited);
     if (*demo) return csculpt::cli::run_demo(demo_options);

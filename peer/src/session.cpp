@@ -18,6 +18,7 @@
 
 #include "csculpt/diff.h"
 #include "csculpt/error.h"
+#include "csculpt/folds.h"
 #include "csculpt/hierarchy.h"
 #include "csculpt/merge.h"
 #include "session_generated.h"
@@ -1099,6 +1100,7 @@ class Node {
     std::lock_guard lock(mutex_);
     hierarchy_ = std::move(h);
     merger_ = std::make_unique<Merger>(*hierarchy_);
+    fold_counter_ = std::make_unique<FoldCounter>(hierarchy_->topology());
   }
 
   // ---- outbound ------------------------------------------------------------------------------
@@ -1204,6 +1206,8 @@ class Node {
     std::vector<std::uint8_t> diff_bytes =
         encode_diff(merged, base_, header, wire_options_for(options_.wire, frame_));
     const float merge_ms = std::chrono::duration<float, std::milli>(Clock::now() - t0).count();
+    // Outside merge_ms: a quality measure of the merge, not part of making it (sparse, cheap).
+    const std::uint32_t folds = fold_counter_->count_new_folds(base_, diffs, merged);
 
     VersionRecord r;
     r.version = version_ + 1;
@@ -1254,6 +1258,7 @@ class Node {
     ++stats_.merges;
     stats_.merged_strokes += merged_strokes;
     stats_.conflicting_strokes += conflicting;
+    stats_.folds_introduced += folds;
     stats_.merge_ms_sum += merge_ms;
     stats_.merge_ms_max = std::max(stats_.merge_ms_max, double(merge_ms));
     stats_.version_bytes_sent += message.size() * membership_.others().size();
@@ -1289,7 +1294,8 @@ class Node {
   std::vector<std::uint8_t> snap_buffer_;
   std::size_t snap_received_ = 0;
   std::unique_ptr<Merger> merger_;
-  std::vector<std::uint64_t> inbound_;  // aligned copy of a misaligned message
+  std::unique_ptr<FoldCounter> fold_counter_;  // the merger's quality count, on hierarchy_
+  std::vector<std::uint64_t> inbound_;         // aligned copy of a misaligned message
 
   // shared with the host (mutex_)
   mutable std::mutex mutex_;

@@ -1,8 +1,9 @@
 // The `csculpt` program run as a user runs it: merge output bit-identical to the SDK's
 // merge_meshes, --help of every subcommand, the error contract on bad input (exit code, one
 // `csculpt: error:` line naming the file and the problem, no output file left behind), the
-// JSON of `hierarchy`, `diff`, `scenarios --json`, `bench merge` and `bench session`, and the
-// demo: a real two-peer session that converges with no lost edit and writes attribution colours.
+// JSON of `hierarchy`, `diff`, `scenarios --json`, `bench merge` and `bench session`, the
+// diagnosis of `merge --explain` on the Blender cases, and the demo: a real two-peer session
+// that converges with no lost edit and writes attribution colours, and its --replay baseline.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -28,6 +29,7 @@
 #include "csculpt/merge.h"
 #include "csculpt/mesh.h"
 #include "csculpt/scenarios.h"
+#include "mini_json.h"
 #include "test_meshes.h"
 
 namespace csculpt {
@@ -205,14 +207,15 @@ TEST_F(Cli, MergeWritesExactlyWhatMergeMeshesComputes) {
 TEST_F(Cli, HelpWorksForEverySubcommand) {
   const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
       {"--help", {"merge", "hierarchy", "diff", "scenarios", "demo", "bench"}},
-      {"merge --help", {"--method", "--k", "-o", "--out", "base", "edits"}},
+      {"merge --help", {"--method", "--k", "-o", "--out", "base", "edits", "--explain", "--ideal"}},
       {"hierarchy --help", {"--k", "mesh"}},
       {"diff --help", {"base", "edited"}},
       {"scenarios --help", {"--faces", "--json"}},
       {"bench --help", {"merge"}},
       {"bench merge --help", {"--faces", "--users", "--repeat", "--method", "--k"}},
       {"demo --help",
-       {"--peers", "--seconds", "--faces", "--sync-ms", "--out", "--seed", "--strokes-per-second"}},
+       {"--peers", "--seconds", "--faces", "--sync-ms", "--out", "--seed", "--strokes-per-second",
+        "--replay"}},
       {"bench session --help", {"--faces", "--peers", "--sync-ms", "--samples"}},
   };
   for (const auto& [args, mentions] : cases) {
@@ -453,7 +456,130 @@ TEST_F(Cli, BenchMergePrintsOneJsonLine) {
   EXPECT_LE(json_number(r.out, "edited_fraction"), 1.0) << r.out;
 }
 
+// ---- merge --explain ---------------------------------------------------------------------
+
+TEST_F(Cli, MergeExplainDiagnosesABlenderCase) {
+  const fs::path c = fs::path(CSCULPT_EVAL_CASES) / "disjoint_sphere";
+  if (!fs::exists(c / "ideal.ply")) GTEST_SKIP() << "no Blender cases at " << CSCULPT_EVAL_CASES;
+  const std::string out = (dir_ / "out" / "merged.ply").string();
+  const Result r = run(
+      "merge " + quote((c / "base.ply").string()) + " " + quote((c / "a.ply").string()) + " " +
+      quote((c / "b.ply").string()) + " -o " + quote(out) + " --explain --ideal " +
+      quote((c / "ideal.ply").string()) + " --ideal " + quote((c / "ideal_frame.ply").string()));
+  expect_one_json_line(r, "merge --explain");
+  ASSERT_TRUE(fs::exists(out));
+  test::Json j;
+  ASSERT_NO_THROW(j = test::JsonParser::parse(r.out)) << r.out;
+
+  const Mesh base = read_mesh((c / "base.ply").string());
+  const HierarchyStats h = Hierarchy::build(base).stats();
+  EXPECT_EQ(j["method"].string, "full");
+  EXPECT_EQ(j["vertices"].number, double(base.vertex_count()));
+  EXPECT_EQ(j["hierarchy_levels"].number, double(h.levels));
+  EXPECT_EQ(j["parts"].number, 1.0) << "an icosphere is one part";
+  EXPECT_EQ(j["new_folds"].number, 0.0);
+  ASSERT_EQ(j["artists"].size(), 2u);
+  for (const test::Json& a : j["artists"].array) {
+    EXPECT_GT(a["support"].number, 0.0);
+    EXPECT_GT(a["rms_size"].number, 0.0);
+    EXPECT_GE(a["max_move"].number, a["rms_size"].number);
+  }
+
+  ASSERT_EQ(j["ideals"].size(), 2u);
+  for (const test::Json& ideal : j["ideals"].array) {
+    SCOPED_TRACE(ideal["file"].string);
+    // disjoint edits: each artist's intent survives (the README's bar is 0.01; 0.05 here
+    // leaves the merge's own tests to hold it)
+    EXPECT_LT(ideal["rel_err"].number, 0.05);
+    ASSERT_EQ(ideal["per_artist"].size(), 2u);
+    for (const test::Json& a : ideal["per_artist"].array) EXPECT_LT(a["rel_err"].number, 0.05);
+    // the scorer's rel_err is the smallest edit's own
+    const std::string& smallest = ideal["smallest_edit"].string;
+    for (const test::Json& a : ideal["per_artist"].array)
+      if (a["artist"].string == smallest) {
+        EXPECT_EQ(a["rel_err"].number, ideal["rel_err"].number);
+      }
+
+    // one entry per hierarchy level, with that level's node count
+    const test::Json& levels = ideal["levels"];
+    ASSERT_EQ(levels.size(), h.levels);
+    for (std::size_t i = 0; i < levels.size(); ++i) {
+      EXPECT_EQ(levels[i]["level"].number, double(i));
+      EXPECT_EQ(levels[i]["nodes"].number, double(h.level_nodes[i]));
+      EXPECT_GE(levels[i]["rms_residual"].number, 0.0);
+    }
+    // level 0's value is the error field itself
+    EXPECT_NEAR(levels[0]["rms_value"].number, ideal["rms_error"].number,
+                1e-5 * ideal["rms_error"].number);
+
+    ASSERT_EQ(ideal["worst_parts"].size(), 1u);
+    EXPECT_EQ(ideal["worst_parts"][0]["vertices"].number, double(base.vertex_count()));
+    EXPECT_NEAR(ideal["worst_parts"][0]["error_share"].number, 1.0, 1e-9);
+
+    const test::Json& worst = ideal["worst_vertices"];
+    ASSERT_EQ(worst.size(), 10u);
+    EXPECT_EQ(worst[0]["error"].number, ideal["max_error"].number);
+    for (std::size_t i = 1; i < worst.size(); ++i)
+      EXPECT_LE(worst[i]["error"].number, worst[i - 1]["error"].number);
+    EXPECT_GT(worst[0]["moved_by"].size(), 0u) << "the worst vertex was moved by someone";
+  }
+}
+
+TEST_F(Cli, MergeExplainOnAManyPartMeshAndItsErrors) {
+  const fs::path c = fs::path(CSCULPT_EVAL_CASES) / "three_artists_spider";
+  if (!fs::exists(c / "ideal.ply")) GTEST_SKIP() << "no Blender cases at " << CSCULPT_EVAL_CASES;
+  const std::string out_dir = (dir_ / "out").string();
+  const std::string out = (dir_ / "out" / "merged.ply").string();
+  const std::string edits = quote((c / "base.ply").string()) + " " + quote((c / "a.ply").string()) +
+                            " " + quote((c / "b.ply").string()) + " " +
+                            quote((c / "c.ply").string()) + " -o " + quote(out);
+  const Result r =
+      run("merge " + edits + " --explain --ideal " + quote((c / "ideal.ply").string()));
+  expect_one_json_line(r, "merge --explain on the spider");
+  test::Json j;
+  ASSERT_NO_THROW(j = test::JsonParser::parse(r.out)) << r.out;
+  EXPECT_EQ(j["artists"].size(), 3u);
+  EXPECT_GT(j["parts"].number, 1.0) << "the spider is made of separate parts";
+  const test::Json& parts = j["ideals"][0]["worst_parts"];
+  EXPECT_EQ(parts.size(), std::min<std::size_t>(10, std::size_t(j["parts"].number)));
+  double share = 0;
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    share += parts[i]["error_share"].number;
+    if (i > 0) {
+      EXPECT_LE(parts[i]["error_share"].number, parts[i - 1]["error_share"].number);
+    }
+  }
+  EXPECT_LE(share, 1.0 + 1e-9);
+
+  // without an ideal: the edits and folds only
+  fs::remove(out);
+  const Result bare = run("merge " + edits + " --explain");
+  expect_one_json_line(bare, "merge --explain without an ideal");
+  EXPECT_EQ(test::JsonParser::parse(bare.out)["ideals"].size(), 0u);
+
+  // an ideal of another mesh: the error contract, naming it, and no merged file
+  fs::remove(out);
+  const std::string other = write(make_sphere(2000), "other.ply");
+  expect_error(run("merge " + edits + " --explain --ideal " + quote(other)), out_dir, other,
+               {"vertices", "triangles"}, "an ideal of another mesh");
+  // --ideal means nothing without --explain
+  EXPECT_NE(run("merge " + edits + " --ideal " + quote((c / "ideal.ply").string())).code, 0);
+  EXPECT_FALSE(fs::exists(out));
+}
+
 // ---- demo and bench session: real peer sessions over loopback ------------------------------
+
+/// folds_introduced and opposed_face_pairs: present, whole, and no more than there are faces
+/// (merges made: each can fold at most every face; the final mesh: at most 1.5 per face).
+void expect_fold_figures(const std::string& summary, std::size_t faces) {
+  const double folds = json_number(summary, "folds_introduced");
+  const double opposed = json_number(summary, "opposed_face_pairs");
+  const double merges = json_number(summary, "merges");
+  EXPECT_TRUE(folds >= 0 && folds == std::floor(folds) && folds <= merges * double(faces))
+      << summary;
+  EXPECT_TRUE(opposed >= 0 && opposed == std::floor(opposed) && opposed <= 1.5 * double(faces))
+      << summary;
+}
 
 TEST_F(Cli, DemoRunsASessionThatConvergesAndWritesAttribution) {
   const std::string out = path("merged.ply");
@@ -476,6 +602,9 @@ TEST_F(Cli, DemoRunsASessionThatConvergesAndWritesAttribution) {
   EXPECT_TRUE(merge_mean > 0 && merge_mean <= json_number(summary, "merge_ms_max")) << summary;
   const double conflicting = json_number(summary, "conflicting_edits");
   EXPECT_TRUE(conflicting >= 0 && conflicting <= json_number(summary, "strokes")) << summary;
+  expect_fold_figures(summary, make_sphere(5000).face_count());
+  EXPECT_EQ(json_number(summary, "artists"), 2.0) << summary;
+  EXPECT_NE(summary.find("\"replay\":false"), std::string::npos) << summary;
   // a live line per merge on stderr
   EXPECT_NE(r.err.find("version 1 by A: merge"), std::string::npos) << r.err;
 
@@ -504,6 +633,32 @@ TEST_F(Cli, DemoRunsASessionThatConvergesAndWritesAttribution) {
   EXPECT_GT(greener, 0u) << "nothing attributed to A alone";
   EXPECT_GT(bluer, 0u) << "nothing attributed to B alone";
   EXPECT_GT(moved, 0.01);
+}
+
+TEST_F(Cli, DemoReplayPlaysEveryArtistsScriptOnOnePeer) {
+  const std::string out = path("replayed.ply");
+  const Result r = run(
+      "demo --replay --peers 2 --faces 5000 --seconds 2 --sync-ms 50 --seed 3 -o " + quote(out));
+  EXPECT_EQ(r.code, 0) << r.err;
+  const std::vector<std::string> lines = lines_of(r.out);
+  ASSERT_FALSE(lines.empty()) << r.err;
+  const std::string& summary = lines.back();
+  EXPECT_NO_THROW(test::JsonParser::parse(summary)) << summary;
+  EXPECT_NE(summary.find("\"replay\":true"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"converged\":true"), std::string::npos) << summary << "\n" << r.err;
+  EXPECT_EQ(json_number(summary, "peers"), 1.0) << summary;
+  EXPECT_EQ(json_number(summary, "artists"), 2.0) << summary;
+  EXPECT_EQ(json_number(summary, "lost_edits"), 0.0) << summary;
+  EXPECT_GT(json_number(summary, "merges"), 0.0) << summary;
+  // one peer alone: nobody to conflict with, nobody to send versions to
+  EXPECT_EQ(json_number(summary, "conflicting_edits"), 0.0) << summary;
+  EXPECT_EQ(json_number(summary, "version_bytes"), 0.0) << summary;
+  // Two scripts at 5 strokes per second each for 2 s: about 20 strokes, more than one
+  // artist's 10 (a loaded machine may lag, hence the margin).
+  EXPECT_GT(json_number(summary, "strokes"), 12.0) << summary;
+  expect_fold_figures(summary, make_sphere(5000).face_count());
+  EXPECT_NE(r.err.find("replaying 2 artists"), std::string::npos) << r.err;
+  EXPECT_EQ(read_mesh(out).vertex_count(), make_sphere(5000).vertex_count());
 }
 
 TEST_F(Cli, BenchSessionPrintsOneJsonLinePerPeerCount) {

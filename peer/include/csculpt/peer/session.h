@@ -84,6 +84,10 @@ struct SessionStats {
   std::uint64_t merges = 0;
   std::uint64_t merged_strokes = 0;
   std::uint64_t conflicting_strokes = 0;  ///< a conflict-rejecting system would refuse these
+  /// New folds of this peer's merges, summed (csculpt/folds.h count_new_folds): faces a merge
+  /// turned by more than 90 degrees from its base that none of the merged diffs turned, i.e.
+  /// creases or spikes no artist made. 0 for a perfect merge.
+  std::uint64_t folds_introduced = 0;
   double merge_ms_sum = 0;
   double merge_ms_max = 0;
   std::uint64_t version_bytes_sent = 0;

@@ -1,0 +1,189 @@
+// Fold-overs (folds.h). The arithmetic follows shared/eval/score_merge.py `flipped` operation
+// for operation (float positions widened to double, numpy.cross's component formulas, the
+// products summed left to right), so a count here equals the scorer's on the same meshes.
+#include "csculpt/folds.h"
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include "csculpt/error.h"
+
+namespace csculpt {
+namespace {
+
+struct Vec3d {
+  double x = 0, y = 0, z = 0;
+};
+
+Vec3d widen(const Vec3f& p) {
+  return {p.x, p.y, p.z};
+}
+
+/// (b - a) x (c - a), unnormalised.
+Vec3d face_normal(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  const Vec3d u{b.x - a.x, b.y - a.y, b.z - a.z};
+  const Vec3d v{c.x - a.x, c.y - a.y, c.z - a.z};
+  return {u.y * v.z - u.z * v.y, u.z * v.x - u.x * v.z, u.x * v.y - u.y * v.x};
+}
+
+/// Turned by more than 90 degrees; a zero normal gives 0, never a flip.
+bool opposed(const Vec3d& n, const Vec3d& m) {
+  return (n.x * m.x + n.y * m.y) + n.z * m.z < 0;
+}
+
+/// Where `diff` puts its i-th changed position.
+Vec3d changed_position(const Diff& diff, std::size_t i) {
+  const float* p = diff.positions.values.data() + 3 * i;
+  return {p[0], p[1], p[2]};
+}
+
+/// Index of `v` among `diff`'s changed positions, or -1.
+std::ptrdiff_t find_changed(const Diff& diff, std::uint32_t v) {
+  const std::vector<std::uint32_t>& indices = diff.positions.indices;
+  const auto it = std::lower_bound(indices.begin(), indices.end(), v);
+  return it != indices.end() && *it == v ? it - indices.begin() : -1;
+}
+
+/// Vertex `v` of `base` with `diff` applied (sparse: the base unless the diff moved it).
+Vec3d position_after(const Mesh& base, const Diff& diff, std::uint32_t v) {
+  const std::ptrdiff_t i = find_changed(diff, v);
+  return i < 0 ? widen(base.positions[v]) : changed_position(diff, static_cast<std::size_t>(i));
+}
+
+Vec3d normal_of(const Mesh& base, const Triangle& t) {
+  return face_normal(widen(base.positions[t[0]]), widen(base.positions[t[1]]),
+                     widen(base.positions[t[2]]));
+}
+
+Vec3d normal_after(const Mesh& base, const Diff& diff, const Triangle& t) {
+  return face_normal(position_after(base, diff, t[0]), position_after(base, diff, t[1]),
+                     position_after(base, diff, t[2]));
+}
+
+constexpr std::uint32_t kNone = 0xffffffffu;
+
+/// `base` with `merged` applied, looked up in O(1) through `slot`: per vertex, its index among
+/// merged's changed positions, or kNone.
+struct MergedView {
+  const Mesh& base;
+  const Diff& merged;
+  std::span<const std::uint32_t> slot;
+
+  bool moved(std::uint32_t v) const { return slot[v] != kNone; }
+  Vec3d position(std::uint32_t v) const {
+    return moved(v) ? changed_position(merged, slot[v]) : widen(base.positions[v]);
+  }
+  Vec3d normal(const Triangle& t) const {
+    return face_normal(position(t[0]), position(t[1]), position(t[2]));
+  }
+};
+
+/// Flipped by the merge and by no single diff. The diffs are searched only for faces the merge
+/// flipped, which are few.
+bool is_new_fold(const MergedView& m, std::span<const Diff* const> diffs, const Triangle& t) {
+  const Vec3d n = normal_of(m.base, t);
+  if (!opposed(n, m.normal(t))) return false;
+  return std::none_of(diffs.begin(), diffs.end(),
+                      [&](const Diff* d) { return opposed(n, normal_after(m.base, *d, t)); });
+}
+
+/// Whether `v` is the lowest vertex of `t` that the merge moved: a face around several moved
+/// vertices is visited from each and counted from that one only.
+bool first_moved_is(const MergedView& m, const Triangle& t, std::uint32_t v) {
+  for (std::uint32_t u : t)
+    if (u < v && m.moved(u)) return false;
+  return true;
+}
+
+void check_vertex_counts(const Mesh& base, std::span<const Diff* const> diffs, const Diff& merged) {
+  const std::size_t n = base.vertex_count();
+  auto fits = [n](const Diff& d) {
+    return d.positions.indices.empty() || d.positions.indices.back() < n;
+  };
+  if (!fits(merged) ||
+      !std::all_of(diffs.begin(), diffs.end(), [&](const Diff* d) { return fits(*d); }))
+    throw InvalidInput("count_new_folds: a diff moves a vertex past the base's " +
+                       std::to_string(n) + " vertices");
+}
+
+/// Sets (or, with `clear`, resets) the slots of merged's changed positions.
+void mark(std::vector<std::uint32_t>& slot, const Diff& merged, bool clear) {
+  const std::vector<std::uint32_t>& indices = merged.positions.indices;
+  for (std::uint32_t i = 0; i < indices.size(); ++i) slot[indices[i]] = clear ? kNone : i;
+}
+
+}  // namespace
+
+FoldCounter::FoldCounter(const Topology& topology)
+    : topology_(&topology), slot_(topology.vertex_count, kNone) {}
+
+std::uint32_t FoldCounter::count_new_folds(const Mesh& base, std::span<const Diff* const> diffs,
+                                           const Diff& merged) {
+  check_vertex_counts(base, diffs, merged);
+  if (topology_->vertex_count != base.vertex_count() ||
+      topology_->triangles.size() != base.face_count())
+    throw InvalidInput("count_new_folds: the topology is not the base's");
+  mark(slot_, merged, false);
+  const MergedView view{base, merged, slot_};
+  std::uint32_t folds = 0;
+  for (std::uint32_t v : merged.positions.indices)
+    for (std::uint32_t f : topology_->vertex_faces.row(v)) {
+      const Triangle& t = base.triangles[f];
+      if (first_moved_is(view, t, v) && is_new_fold(view, diffs, t)) ++folds;
+    }
+  mark(slot_, merged, true);  // all kNone again for the next call
+  return folds;
+}
+
+std::uint32_t count_new_folds(const Topology& topology, const Mesh& base,
+                              std::span<const Diff* const> diffs, const Diff& merged) {
+  return FoldCounter(topology).count_new_folds(base, diffs, merged);
+}
+
+std::uint32_t count_new_folds(const Mesh& base, std::span<const Diff* const> diffs,
+                              const Diff& merged) {
+  check_vertex_counts(base, diffs, merged);
+  std::vector<std::uint32_t> slot(base.vertex_count(), kNone);
+  mark(slot, merged, false);
+  const MergedView view{base, merged, slot};
+  std::uint32_t folds = 0;
+  for (const Triangle& t : base.triangles)
+    if ((view.moved(t[0]) || view.moved(t[1]) || view.moved(t[2])) && is_new_fold(view, diffs, t))
+      ++folds;
+  return folds;
+}
+
+std::uint32_t count_opposed_face_pairs(const Mesh& mesh) {
+  struct EdgeFace {
+    std::uint64_t edge;  ///< (lower vertex << 32) | higher vertex
+    std::uint32_t face;
+  };
+  std::vector<EdgeFace> edges;
+  edges.reserve(3 * mesh.face_count());
+  std::vector<Vec3d> normals;
+  normals.reserve(mesh.face_count());
+  for (std::uint32_t f = 0; f < mesh.face_count(); ++f) {
+    const Triangle& t = mesh.triangles[f];
+    normals.push_back(normal_of(mesh, t));
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::uint32_t a = t[k], b = t[(k + 1) % 3];
+      edges.push_back({std::uint64_t{std::min(a, b)} << 32 | std::max(a, b), f});
+    }
+  }
+  std::sort(edges.begin(), edges.end(), [](const EdgeFace& x, const EdgeFace& y) {
+    return x.edge != y.edge ? x.edge < y.edge : x.face < y.face;
+  });
+  std::uint32_t pairs = 0;
+  // Faces around one edge are adjacent in the sorted list; a non-manifold edge counts every
+  // opposed pair among its faces.
+  for (std::size_t begin = 0, end = 0; begin < edges.size(); begin = end) {
+    while (end < edges.size() && edges[end].edge == edges[begin].edge) ++end;
+    for (std::size_t i = begin; i < end; ++i)
+      for (std::size_t j = i + 1; j < end; ++j)
+        pairs += opposed(normals[edges[i].face], normals[edges[j].face]) ? 1u : 0u;
+  }
+  return pairs;
+}
+
+}  // namespace csculpt
