@@ -15,6 +15,7 @@
 #include "csculpt/error.h"
 #include "csculpt/folds.h"
 #include "csculpt/io.h"
+#include "csculpt/vec3.h"
 #include "json_writer.h"
 
 namespace csculpt::cli {
@@ -24,18 +25,14 @@ constexpr std::size_t kWorst = 10;  ///< parts and vertices listed
 
 // ---- per-vertex vectors -------------------------------------------------------------------
 
-struct V3 {
-  double x = 0, y = 0, z = 0;
-};
-
-V3 minus(const Vec3f& a, const Vec3f& b) {
-  return {double(a.x) - double(b.x), double(a.y) - double(b.y), double(a.z) - double(b.z)};
+Vec3d minus(const Vec3f& a, const Vec3f& b) {
+  return sub(widen(a), widen(b));
 }
 /// (x^2 + y^2) + z^2, numpy.linalg.norm's order.
-double squared(const V3& v) {
-  return (v.x * v.x + v.y * v.y) + v.z * v.z;
+double squared(const Vec3d& v) {
+  return dot(v, v);
 }
-double length(const V3& v) {
+double length(const Vec3d& v) {
   return std::sqrt(squared(v));
 }
 
@@ -139,45 +136,45 @@ Parts connected_parts(const Mesh& mesh) {
 
 /// Each node of the next level: the weighted average of its children (the decomposition the
 /// merge runs on dual quaternions, paper §3.1, here on the error's translations).
-std::vector<V3> average_into_parents(const HierarchyLevel& fine, const HierarchyLevel& coarse,
-                                     std::uint32_t stride, const std::vector<V3>& values) {
-  std::vector<V3> sums(coarse.node_count);
+std::vector<Vec3d> average_into_parents(const HierarchyLevel& fine, const HierarchyLevel& coarse,
+                                        std::uint32_t stride, const std::vector<Vec3d>& values) {
+  std::vector<Vec3d> sums(coarse.node_count);
   for (std::uint32_t c = 0; c < fine.node_count; ++c)
     for (std::uint32_t k = 0; k < fine.parent_count[c]; ++k) {
       const std::size_t slot = std::size_t{c} * stride + k;
       const double w = fine.parent_weight[slot];
-      V3& s = sums[fine.parent[slot]];
-      s = {s.x + w * values[c].x, s.y + w * values[c].y, s.z + w * values[c].z};
+      Vec3d& s = sums[fine.parent[slot]];
+      s = add(s, scale(values[c], w));
     }
   for (std::uint32_t p = 0; p < coarse.node_count; ++p) {
     const double total = coarse.child_weight_sum[p];
-    sums[p] = total > 0 ? V3{sums[p].x / total, sums[p].y / total, sums[p].z / total} : V3{};
+    sums[p] = total > 0 ? Vec3d{sums[p].x / total, sums[p].y / total, sums[p].z / total} : Vec3d{};
   }
   return sums;
 }
 
 /// RMS over a level's nodes of node - (weighted average of its parents): what this level adds.
-double residual_rms(const HierarchyLevel& fine, std::uint32_t stride, const std::vector<V3>& values,
-                    const std::vector<V3>& parents) {
+double residual_rms(const HierarchyLevel& fine, std::uint32_t stride,
+                    const std::vector<Vec3d>& values, const std::vector<Vec3d>& parents) {
   if (fine.node_count == 0) return 0;
   double sum = 0;
   for (std::uint32_t c = 0; c < fine.node_count; ++c) {
-    V3 r = values[c];
+    Vec3d r = values[c];
     for (std::uint32_t k = 0; k < fine.parent_count[c]; ++k) {
       const std::size_t slot = std::size_t{c} * stride + k;
       const double w = fine.parent_weight[slot];
-      const V3& p = parents[fine.parent[slot]];
-      r = {r.x - w * p.x, r.y - w * p.y, r.z - w * p.z};
+      const Vec3d& p = parents[fine.parent[slot]];
+      r = sub(r, scale(p, w));
     }
     sum += squared(r);
   }
   return std::sqrt(sum / fine.node_count);
 }
 
-double rms_of(const std::vector<V3>& values) {
+double rms_of(const std::vector<Vec3d>& values) {
   if (values.empty()) return 0;
   double sum = 0;
-  for (const V3& v : values) sum += squared(v);
+  for (const Vec3d& v : values) sum += squared(v);
   return std::sqrt(sum / static_cast<double>(values.size()));
 }
 
@@ -189,7 +186,7 @@ struct LevelError {
 
 /// The error decomposed level by level: level 0 is per vertex, the coarsest's residual is
 /// its whole value (it has no parents).
-std::vector<LevelError> decompose(const Hierarchy& h, std::vector<V3> values) {
+std::vector<LevelError> decompose(const Hierarchy& h, std::vector<Vec3d> values) {
   const std::span<const HierarchyLevel> levels = h.levels();
   std::vector<LevelError> out;
   for (std::size_t i = 0; i < levels.size(); ++i) {
@@ -197,7 +194,8 @@ std::vector<LevelError> decompose(const Hierarchy& h, std::vector<V3> values) {
     if (i + 1 == levels.size()) {
       e.residual_rms = e.value_rms;
     } else {
-      std::vector<V3> coarse = average_into_parents(levels[i], levels[i + 1], h.stride(), values);
+      std::vector<Vec3d> coarse =
+          average_into_parents(levels[i], levels[i + 1], h.stride(), values);
       e.residual_rms = residual_rms(levels[i], h.stride(), values, coarse);
       values = std::move(coarse);
     }
@@ -217,13 +215,13 @@ Mesh read_ideal(const std::string& path, const Mesh& base) {
   return ideal;
 }
 
-std::vector<V3> error_field(const Mesh& result, const Mesh& ideal) {
-  std::vector<V3> e(result.vertex_count());
+std::vector<Vec3d> error_field(const Mesh& result, const Mesh& ideal) {
+  std::vector<Vec3d> e(result.vertex_count());
   for (std::size_t v = 0; v < e.size(); ++v) e[v] = minus(result.positions[v], ideal.positions[v]);
   return e;
 }
 
-std::vector<double> lengths(const std::vector<V3>& field) {
+std::vector<double> lengths(const std::vector<Vec3d>& field) {
   std::vector<double> out(field.size());
   std::transform(field.begin(), field.end(), out.begin(), length);
   return out;
@@ -275,7 +273,7 @@ void write_parts(JsonWriter& j, const std::vector<double>& error, const Parts& p
   j.end_array();
 }
 
-void write_levels(JsonWriter& j, const Hierarchy& h, const std::vector<V3>& field) {
+void write_levels(JsonWriter& j, const Hierarchy& h, const std::vector<Vec3d>& field) {
   j.key("levels").begin_array();
   std::uint32_t level = 0;
   for (const LevelError& e : decompose(h, field))
@@ -303,7 +301,7 @@ void write_worst_vertices(JsonWriter& j, const std::vector<double>& error,
 
 void write_ideal(JsonWriter& j, const ExplainInput& in, const std::string& path,
                  const std::vector<Artist>& artists, const Parts& parts) {
-  const std::vector<V3> field = error_field(in.result, read_ideal(path, in.base));
+  const std::vector<Vec3d> field = error_field(in.result, read_ideal(path, in.base));
   const std::vector<double> error = lengths(field);
   j.begin_object().field("file", path);
   write_rel_errors(j, error, artists);

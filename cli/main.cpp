@@ -23,6 +23,14 @@ namespace {
 
 using namespace csculpt;
 
+/// "full, paper-blend, ...": every method the SDK knows, so the help cannot fall behind.
+std::string method_names() {
+  std::string names;
+  for (MergeMethod m : all_merge_methods())
+    names += (names.empty() ? "" : ", ") + std::string(to_string(m));
+  return names;
+}
+
 struct MergeCommand {
   std::string base, out, method = "full";
   std::vector<std::string> edits;
@@ -158,11 +166,7 @@ int main(int argc, char** argv) {
       ->expected(2, -1)
       ->check(CLI::ExistingFile);
   merge->add_option("-o,--out", mc.out, "merged mesh to write (.ply or .obj)")->required();
-  merge
-      ->add_option("--method", mc.method,
-                   "full, single-parent, single-level-isometry, multiscale-translation, "
-                   "weighted-translation, average, sum")
-      ->capture_default_str();
+  merge->add_option("--method", mc.method, method_names())->capture_default_str();
   merge->add_option("--k", mc.k, "blended parents per node (paper: 7)")
       ->capture_default_str()
       ->check(CLI::Range(1, 32));

@@ -8,28 +8,19 @@
 #include <vector>
 
 #include "csculpt/error.h"
+#include "csculpt/vec3.h"
 
 namespace csculpt {
 namespace {
 
-struct Vec3d {
-  double x = 0, y = 0, z = 0;
-};
-
-Vec3d widen(const Vec3f& p) {
-  return {p.x, p.y, p.z};
-}
-
 /// (b - a) x (c - a), unnormalised.
 Vec3d face_normal(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
-  const Vec3d u{b.x - a.x, b.y - a.y, b.z - a.z};
-  const Vec3d v{c.x - a.x, c.y - a.y, c.z - a.z};
-  return {u.y * v.z - u.z * v.y, u.z * v.x - u.x * v.z, u.x * v.y - u.y * v.x};
+  return cross(sub(b, a), sub(c, a));
 }
 
 /// Turned by more than 90 degrees; a zero normal gives 0, never a flip.
 bool opposed(const Vec3d& n, const Vec3d& m) {
-  return (n.x * m.x + n.y * m.y) + n.z * m.z < 0;
+  return dot(n, m) < 0;
 }
 
 /// Where `diff` puts its i-th changed position.

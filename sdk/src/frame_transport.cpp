@@ -15,30 +15,15 @@ bool has(const std::uint64_t* bits, std::uint32_t v) {
   return (bits[v >> 6] >> (v & 63) & 1) != 0;
 }
 
-struct D3 {
-  double x = 0, y = 0, z = 0;
-};
-D3 operator+(const D3& a, const D3& b) {
-  return {a.x + b.x, a.y + b.y, a.z + b.z};
-}
-D3 operator-(const D3& a, const D3& b) {
-  return {a.x - b.x, a.y - b.y, a.z - b.z};
-}
-D3 operator*(double s, const D3& a) {
-  return {s * a.x, s * a.y, s * a.z};
-}
-D3 cross(const D3& a, const D3& b) {
-  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-double norm2(const D3& a) {
-  return a.x * a.x + a.y * a.y + a.z * a.z;
+double norm2(const Vec3d& a) {
+  return dot(a, a);
 }
 
 /// (R - I) v for the rotation of unit quaternion q: v' - v = w t + q.xyz x t, t = 2 q.xyz x v.
-D3 rotation_change(const Quat& q, const D3& v) {
-  const D3 u{q.x, q.y, q.z};
-  const D3 t = 2.0 * cross(u, v);
-  return double(q.w) * t + cross(u, t);
+Vec3d rotation_change(const Quat& q, const Vec3d& v) {
+  const Vec3d u{q.x, q.y, q.z};
+  const Vec3d t = scale(cross(u, v), 2.0);
+  return add(scale(t, q.w), cross(u, t));
 }
 
 bool is_identity(const Quat& q) {
@@ -47,7 +32,7 @@ bool is_identity(const Quat& q) {
 
 /// Everything the per-vertex formula needs about one vertex.
 struct VertexState {
-  std::array<D3, kMaxUsers> d;
+  std::array<Vec3d, kMaxUsers> d;
   std::array<double, kMaxUsers> size;
   std::array<Quat, kMaxUsers> rotation;
   std::array<bool, kMaxUsers> moves, turns;
@@ -65,6 +50,8 @@ class Transport {
   Vec3f merged(std::size_t at) const;
 
  private:
+  std::uint32_t group_coincident();
+  void share_rotations(std::uint32_t groups);
   void load(std::size_t at, VertexState& s) const;
   Quat rotation(std::size_t at, std::size_t i) const;
 
@@ -87,35 +74,43 @@ std::uint64_t position_hash(const Vec3f& p) {
 /// Groups the listed vertices that sit at the same base position (split seams), and gives
 /// every member of a group, per diff, the normalised sum of the members' rotations.
 void Transport::find_seams() {
+  share_rotations(group_coincident());
+}
+
+/// seam_of: per listed vertex, its group of coincident vertices (kNoSeam when alone), groups
+/// numbered in list order; returns how many groups there are.
+std::uint32_t Transport::group_coincident() {
   const std::size_t count = vertices_.size();
   auto& seam_of = scratch_.seam_of;
   seam_of.assign(count, kNoSeam);
-  scratch_.seam_first.clear();
+  std::uint32_t groups = 0;
   std::size_t size = 64;
   while (size < 2 * count) size *= 2;
   auto& table = scratch_.table;
-  table.assign(size, 0);  // slot: 1 + position in the list, 0 = empty
+  table.assign(size, 0);
   for (std::size_t at = 0; at < count; ++at) {
     const Vec3f& p = base_[vertices_[at]];
     for (std::size_t h = position_hash(p) & (size - 1);; h = (h + 1) & (size - 1)) {
       if (table[h] == 0) {
-        table[h] = at + 1;
+        table[h] = static_cast<std::uint32_t>(at + 1);
         break;
       }
       const std::size_t other = table[h] - 1;
       const Vec3f& q = base_[vertices_[other]];
       if (!(q.x == p.x && q.y == p.y && q.z == p.z)) continue;
-      if (seam_of[other] == kNoSeam) {
-        seam_of[other] = static_cast<std::uint32_t>(scratch_.seam_first.size());
-        scratch_.seam_first.push_back(static_cast<std::uint32_t>(other));
-      }
+      if (seam_of[other] == kNoSeam) seam_of[other] = groups++;
       seam_of[at] = seam_of[other];
       break;
     }
   }
-  const std::size_t groups = scratch_.seam_first.size();
+  return groups;
+}
+
+void Transport::share_rotations(std::uint32_t groups) {
+  const std::size_t count = vertices_.size();
+  const auto& seam_of = scratch_.seam_of;
   auto& shared = scratch_.seam_rotation;
-  shared.assign(groups * n_, Quat{0, 0, 0, 0});
+  shared.assign(std::size_t{groups} * n_, Quat{0, 0, 0, 0});
   for (std::size_t at = 0; at < count; ++at) {
     if (seam_of[at] == kNoSeam) continue;
     for (std::size_t i = 0; i < n_; ++i) {
@@ -146,7 +141,7 @@ void Transport::load(std::size_t at, VertexState& s) const {
     s.moves[i] = has(u.changed, v);
     if (s.moves[i]) {
       const float* e = u.edited + 3 * std::size_t{u.slot[v]};
-      s.d[i] = {double(e[0]) - b.x, double(e[1]) - b.y, double(e[2]) - b.z};
+      s.d[i] = sub(widen(Vec3f{e[0], e[1], e[2]}), widen(b));
     } else {
       s.d[i] = {};
     }
@@ -164,7 +159,8 @@ void Transport::chunk_energy(std::size_t begin, std::size_t end, double* energy)
     for (std::size_t i = 0; i < n_; ++i) {
       if (!s.turns[i]) continue;
       for (std::size_t j = 0; j < n_; ++j)
-        if (j != i && s.moves[j]) energy[i * n_ + j] += norm2(rotation_change(s.rotation[i], s.d[j]));
+        if (j != i && s.moves[j])
+          energy[i * n_ + j] += norm2(rotation_change(s.rotation[i], s.d[j]));
     }
   }
 }
@@ -188,7 +184,7 @@ void Transport::finish_weights(std::size_t chunks) {
 double sameness(const VertexState& s, std::size_t i, std::size_t j) {
   const double m = std::max(s.size[i], s.size[j]);
   if (!(m > 0)) return 0;
-  const double r = std::max(0.0, 1.0 - std::sqrt(norm2(s.d[i] - s.d[j])) / m);
+  const double r = std::max(0.0, 1.0 - std::sqrt(norm2(sub(s.d[i], s.d[j]))) / m);
   return r * r;
 }
 
@@ -197,19 +193,19 @@ Vec3f Transport::merged(std::size_t at) const {
   load(at, s);
   const std::uint32_t v = vertices_[at];
   const Vec3f& b = base_[v];
-  D3 sum{};
+  Vec3d sum{};
   for (std::size_t j = 0; j < n_; ++j) {
     if (!s.moves[j]) continue;
     double count = 1;
     for (std::size_t k = 0; k < n_; ++k)
       if (k != j && s.moves[k]) count += sameness(s, j, k);
-    D3 carried = s.d[j];
+    Vec3d carried = s.d[j];
     for (std::size_t i = n_; i-- > 0;) {
       if (i == j || !s.turns[i]) continue;
       const double g = (1.0 - sameness(s, i, j)) * scratch_.weight[i * n_ + j];
-      if (g > 0) carried = carried + g * rotation_change(s.rotation[i], carried);
+      if (g > 0) carried = add(carried, scale(rotation_change(s.rotation[i], carried), g));
     }
-    sum = sum + (count == 1 ? carried : (1.0 / count) * carried);
+    sum = add(sum, count == 1 ? carried : scale(carried, 1.0 / count));
   }
   return {static_cast<float>(b.x + sum.x), static_cast<float>(b.y + sum.y),
           static_cast<float>(b.z + sum.z)};

@@ -47,12 +47,11 @@ struct TransportInput {
 
 /// Scratch reused across merges (no allocation once warm).
 struct TransportScratch {
-  std::vector<double> chunk_energy;  ///< per chunk, users x users sums of |(R_i - I) d_j|^2
-  std::vector<double> weight;        ///< users x users: w_ij
-  std::vector<Quat> seam_rotation;   ///< per seam member and diff: the shared rotation
-  std::vector<std::uint32_t> seam_of;      ///< per listed vertex: its seam group or kNoSeam
-  std::vector<std::uint64_t> table;        ///< open-addressing table: (position hash, index)
-  std::vector<std::uint32_t> seam_first;   ///< per seam group: first position in the list
+  std::vector<double> chunk_energy;    ///< per chunk, users x users sums of |(R_i - I) d_j|^2
+  std::vector<double> weight;          ///< users x users: w_ij
+  std::vector<Quat> seam_rotation;     ///< per seam group and diff: the shared rotation
+  std::vector<std::uint32_t> seam_of;  ///< per listed vertex: its seam group or kNoSeam
+  std::vector<std::uint32_t> table;    ///< open addressing by position: 1 + list index, 0 empty
 };
 
 /// Merged positions of the vertices in `vertices` (increasing: the union of the changed

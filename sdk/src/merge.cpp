@@ -902,16 +902,20 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
       const std::size_t chunks = (n_changed + kGrain - 1) / kGrain;
       if (ws.moved.size() < n_changed) ws.moved.resize(n_changed);
       if (ws.chunk_offset.size() < chunks + 1) ws.chunk_offset.resize(chunks + 1);
+      auto count_kept = [&](std::size_t begin, std::size_t end) {
+        std::size_t kept = 0;
+        for (std::size_t i = begin; i < end; ++i)
+          kept += !(ws.moved[i] == base.positions[changed_union[i]]);
+        ws.chunk_offset[begin / kGrain + 1] = kept;
+      };
       const std::function<void(std::size_t, std::size_t)> move_vertices = [&](std::size_t begin,
                                                                               std::size_t end) {
-        std::size_t kept = 0;
         for (std::size_t i = begin; i < end; ++i) {
           const std::uint32_t v = changed_union[i];
           ws.moved[i] =
               from_local(ws.dq_merged.levels[0].val(v).apply(local.to_local(base.positions[v])));
-          kept += !(ws.moved[i] == base.positions[v]);
         }
-        ws.chunk_offset[begin / kGrain + 1] = kept;
+        count_kept(begin, end);
       };
       if (t.transport) {
         ws.transport_inputs.resize(users);
@@ -926,12 +930,7 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
                                     std::span(ws.moved.data(), n_changed));
         for (std::uint32_t u = 0; u < users; ++u)
           ws.lookups[u].changed.clear(diffs[order[u]]->positions.indices);
-        ws.pool.for_chunks(n_changed, kGrain, [&](std::size_t begin, std::size_t end) {
-          std::size_t kept = 0;
-          for (std::size_t i = begin; i < end; ++i)
-            kept += !(ws.moved[i] == base.positions[changed_union[i]]);
-          ws.chunk_offset[begin / kGrain + 1] = kept;
-        });
+        ws.pool.for_chunks(n_changed, kGrain, count_kept);
       } else {
         blend_and_reconstruct<DqOps>(links, level_count, std::span(ws.dq_users.data(), users),
                                      ws.dq_merged, t.node_blend, ws.pool, &move_vertices);

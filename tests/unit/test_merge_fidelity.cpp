@@ -14,6 +14,7 @@
 #include "csculpt/generate.h"
 #include "csculpt/hierarchy.h"
 #include "csculpt/merge.h"
+#include "csculpt/vec3.h"
 
 namespace csculpt {
 namespace {
@@ -27,8 +28,8 @@ Mesh deformed(const Mesh& base, const Deform& f) {
 }
 
 double distance(const Vec3f& a, const Vec3f& b) {
-  const double x = double(a.x) - b.x, y = double(a.y) - b.y, z = double(a.z) - b.z;
-  return std::sqrt(x * x + y * y + z * z);
+  const Vec3d d = sub(widen(a), widen(b));
+  return std::sqrt(dot(d, d));
 }
 
 double max_change(const Mesh& a, const Mesh& b) {
@@ -38,16 +39,11 @@ double max_change(const Mesh& a, const Mesh& b) {
   return m;
 }
 
-Vec3f normalized(Vec3f v) {
-  const float n = std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
-  return {v.x / n, v.y / n, v.z / n};
-}
-
 /// A smooth radial bump of height h and radius r around the unit direction c (on a sphere
 /// centred at the origin: along the normal), a function of position only.
 Deform bump(Vec3f c, float h, float r) {
   return [=](const Vec3f& p) {
-    const Vec3f n = normalized(p);
+    const Vec3f n = unit(p);
     const float dx = n.x - c.x, dy = n.y - c.y, dz = n.z - c.z;
     const float d2 = (dx * dx + dy * dy + dz * dz) / (r * r);
     const float k = d2 < 1 ? h * (1 - d2) * (1 - d2) * (1 - d2) : 0.f;
@@ -130,8 +126,7 @@ TEST(MergeFidelity, DisjointExactAndContinuousAsOneEditSlidesIntoTheOther) {
       const double input_step = max_change(b, previous_b);
       const double output_step = max_change(result, previous);
       EXPECT_LT(output_step, 3.0 * input_step + 1e-6)
-          << "step " << step << ": the bump moved " << input_step << ", the result "
-          << output_step;
+          << "step " << step << ": the bump moved " << input_step << ", the result " << output_step;
     }
     previous = result;
     previous_b = b;
@@ -143,7 +138,7 @@ TEST(MergeFidelity, ADetailRidesACoarseTwistAtItsOwnHeight) {
   const Mesh base = make_sphere(20000);
   const Hierarchy h = Hierarchy::build(base);
   const Deform tw = twist(1.2f);
-  const Deform bu = bump(normalized({0.6f, 0, 0.8f}), 0.05f, 0.3f);
+  const Deform bu = bump(unit({0.6f, 0, 0.8f}), 0.05f, 0.3f);
   const Mesh coarse = deformed(base, tw), fine = deformed(base, bu);
   // the detail's height re-applied along the twisted surface's normals (shared/eval's
   // ideal_frame): a detail keeps its height and follows the surface
@@ -151,7 +146,7 @@ TEST(MergeFidelity, ADetailRidesACoarseTwistAtItsOwnHeight) {
   const std::vector<Vec3f> normals = vertex_normals(coarse);
   for (std::size_t v = 0; v < base.positions.size(); ++v) {
     const float k = static_cast<float>(distance(fine.positions[v], base.positions[v]));
-    const Vec3f n = normalized(normals[v]);
+    const Vec3f n = unit(normals[v]);
     ideal.positions[v] = {coarse.positions[v].x + k * n.x, coarse.positions[v].y + k * n.y,
                           coarse.positions[v].z + k * n.z};
   }
@@ -199,7 +194,7 @@ TEST(MergeFidelity, SplitSeamsMovedTogetherStayClosed) {
   // a twist through the seam and a bump on it: both functions of position, so each artist
   // moves the two copies of a seam vertex together
   const Mesh coarse = deformed(base, twist(1.0f));
-  const Mesh fine = deformed(base, bump(normalized({0.8f, 0, 0.6f}), 0.05f, 0.4f));
+  const Mesh fine = deformed(base, bump(unit({0.8f, 0, 0.6f}), 0.05f, 0.4f));
   for (const auto& [v, w] : twins) {
     ASSERT_EQ(coarse.positions[v], coarse.positions[w]);
     ASSERT_EQ(fine.positions[v], fine.positions[w]);

@@ -1,5 +1,5 @@
-// Small Vec3f helpers for strokes, generators and tests (the merge's hot loops spell their
-// arithmetic out in double where precision matters).
+// Small 3-vector helpers for strokes, generators, the merge and tests: Vec3f (the mesh's
+// positions) and Vec3d (double-precision arithmetic on them).
 #pragma once
 
 #include <cmath>
@@ -27,6 +27,30 @@ inline Vec3f cross(Vec3f a, Vec3f b) {
 inline Vec3f unit(Vec3f a) {
   const float n = std::sqrt(dot(a, a));
   return n > 0 ? scale(a, 1.f / n) : a;
+}
+
+/// Double precision, for sums, distances and normals computed from float positions (each
+/// operation in the order written, so results match numpy's on the same values).
+struct Vec3d {
+  double x = 0, y = 0, z = 0;
+};
+inline Vec3d widen(Vec3f p) {
+  return {p.x, p.y, p.z};
+}
+inline Vec3d add(Vec3d a, Vec3d b) {
+  return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+inline Vec3d sub(Vec3d a, Vec3d b) {
+  return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+inline Vec3d scale(Vec3d a, double s) {
+  return {a.x * s, a.y * s, a.z * s};
+}
+inline double dot(Vec3d a, Vec3d b) {
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+inline Vec3d cross(Vec3d a, Vec3d b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
 
 }  // namespace csculpt
