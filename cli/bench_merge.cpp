@@ -61,7 +61,7 @@ int bench_merge(const BenchMergeOptions& o) {
     edits.push_back(std::move(edit));
   }
 
-  std::vector<double> capture_ms, merge_ms, stream_ms, iso_ms, dec_ms, blend_ms, apply_ms;
+  std::vector<double> capture_ms, merge_ms, stream_ms, iso_ms, dec_ms, blend_ms, apply_ms, folds_ms;
   std::vector<Diff> diffs(o.users);
   Merger merger(hierarchy);
   const MergeFrame frame = MergeFrame::fit(base.positions);
@@ -94,6 +94,7 @@ int bench_merge(const BenchMergeOptions& o) {
     dec_ms.push_back(t.decompose_ms);
     blend_ms.push_back(t.blend_ms);
     apply_ms.push_back(t.apply_ms);
+    folds_ms.push_back(t.fold_repair_ms);
   }
   const HierarchyStats hs = hierarchy.stats();
   std::printf(
@@ -101,13 +102,14 @@ int bench_merge(const BenchMergeOptions& o) {
       "\"k\":%u,\"levels\":%u,\"nodes\":%llu,\"edited_fraction\":%.3f,\"strokes\":%u,"
       "\"repeat\":%u,\"hierarchy_ms\":%.3f,\"capture_ms\":%.3f,\"merge_ms\":%.3f,"
       "\"stream_ms\":%.3f,\"merge_to_stream\":%.2f,\"isometry_ms\":%.3f,\"decompose_ms\":%.3f,"
-      "\"blend_ms\":%.3f,\"apply_ms\":%.3f,\"nodes_visited\":%llu,\"bytes_touched\":%llu,"
+      "\"blend_ms\":%.3f,\"fold_repair_ms\":%.3f,\"apply_ms\":%.3f,\"nodes_visited\":%llu,\"bytes_"
+      "touched\":%llu,"
       "\"merged_vertices\":%zu}\n",
       std::string(to_string(method)).c_str(), base.face_count(), base.vertex_count(), o.users, o.k,
       hs.levels, static_cast<unsigned long long>(hs.nodes), fraction_sum / o.users, strokes_total,
       o.repeat, median(hierarchy_ms), median(capture_ms), median(merge_ms), median(stream_ms),
       median(merge_ms) / std::max(1e-9, median(stream_ms)), median(iso_ms), median(dec_ms),
-      median(blend_ms), median(apply_ms), static_cast<unsigned long long>(nodes),
+      median(blend_ms), median(folds_ms), median(apply_ms), static_cast<unsigned long long>(nodes),
       static_cast<unsigned long long>(bytes), merged_vertices);
   return 0;
 }

@@ -1,6 +1,5 @@
-// Fold-overs (folds.h). The arithmetic follows shared/eval/score_merge.py `flipped` operation
-// for operation (float positions widened to double, numpy.cross's component formulas, the
-// products summed left to right), so a count here equals the scorer's on the same meshes.
+// Fold-overs (folds.h), with the scorer's face test (fold_test.h), so a count here equals
+// shared/eval/score_merge.py's on the same meshes.
 #include "csculpt/folds.h"
 
 #include <algorithm>
@@ -9,47 +8,17 @@
 
 #include "csculpt/error.h"
 #include "csculpt/vec3.h"
+#include "fold_test.h"
 
 namespace csculpt {
 namespace {
 
-/// (b - a) x (c - a), unnormalised.
-Vec3d face_normal(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
-  return cross(sub(b, a), sub(c, a));
-}
-
-/// Turned by more than 90 degrees; a zero normal gives 0, never a flip.
-bool opposed(const Vec3d& n, const Vec3d& m) {
-  return dot(n, m) < 0;
-}
-
-/// Where `diff` puts its i-th changed position.
-Vec3d changed_position(const Diff& diff, std::size_t i) {
-  const float* p = diff.positions.values.data() + 3 * i;
-  return {p[0], p[1], p[2]};
-}
-
-/// Index of `v` among `diff`'s changed positions, or -1.
-std::ptrdiff_t find_changed(const Diff& diff, std::uint32_t v) {
-  const std::vector<std::uint32_t>& indices = diff.positions.indices;
-  const auto it = std::lower_bound(indices.begin(), indices.end(), v);
-  return it != indices.end() && *it == v ? it - indices.begin() : -1;
-}
-
-/// Vertex `v` of `base` with `diff` applied (sparse: the base unless the diff moved it).
-Vec3d position_after(const Mesh& base, const Diff& diff, std::uint32_t v) {
-  const std::ptrdiff_t i = find_changed(diff, v);
-  return i < 0 ? widen(base.positions[v]) : changed_position(diff, static_cast<std::size_t>(i));
-}
+using detail::base_normal;
+using detail::changed_position;
+using detail::opposed;
 
 Vec3d normal_of(const Mesh& base, const Triangle& t) {
-  return face_normal(widen(base.positions[t[0]]), widen(base.positions[t[1]]),
-                     widen(base.positions[t[2]]));
-}
-
-Vec3d normal_after(const Mesh& base, const Diff& diff, const Triangle& t) {
-  return face_normal(position_after(base, diff, t[0]), position_after(base, diff, t[1]),
-                     position_after(base, diff, t[2]));
+  return base_normal(base.positions, t);
 }
 
 constexpr std::uint32_t kNone = 0xffffffffu;
@@ -66,7 +35,7 @@ struct MergedView {
     return moved(v) ? changed_position(merged, slot[v]) : widen(base.positions[v]);
   }
   Vec3d normal(const Triangle& t) const {
-    return face_normal(position(t[0]), position(t[1]), position(t[2]));
+    return detail::face_normal(position(t[0]), position(t[1]), position(t[2]));
   }
 };
 
@@ -74,9 +43,7 @@ struct MergedView {
 /// flipped, which are few.
 bool is_new_fold(const MergedView& m, std::span<const Diff* const> diffs, const Triangle& t) {
   const Vec3d n = normal_of(m.base, t);
-  if (!opposed(n, m.normal(t))) return false;
-  return std::none_of(diffs.begin(), diffs.end(),
-                      [&](const Diff* d) { return opposed(n, normal_after(m.base, *d, t)); });
+  return opposed(n, m.normal(t)) && !detail::flipped_by_a_diff(m.base.positions, diffs, t, n);
 }
 
 /// Whether `v` is the lowest vertex of `t` that the merge moved: a face around several moved

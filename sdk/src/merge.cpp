@@ -26,6 +26,7 @@
 #include "csculpt/error.h"
 #include "dq_simd.h"
 #include "dq_soa.h"
+#include "fold_repair.h"
 #include "frame_transport.h"
 #include "vertex_isometry_kernel.h"
 #include "worker_pool.h"
@@ -711,6 +712,8 @@ struct Merger::Workspace {
   std::vector<std::size_t> chunk_offset;  ///< where each chunk of them starts in the list
   std::vector<detail::TransportInput> transport_inputs;
   detail::TransportScratch transport;
+  detail::FoldRepairScratch fold_repair;
+  std::vector<const Diff*> ordered;  ///< the diffs in canonical order
   detail::WorkerPool pool;
 };
 
@@ -930,6 +933,13 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
                                     std::span(ws.moved.data(), n_changed));
         for (std::uint32_t u = 0; u < users; ++u)
           ws.lookups[u].changed.clear(diffs[order[u]]->positions.indices);
+        ws.ordered.resize(users);
+        for (std::uint32_t u = 0; u < users; ++u) ws.ordered[u] = diffs[order[u]];
+        const auto t_folds = Clock::now();
+        timings_.new_folds_repaired += detail::repair_new_folds(
+            hierarchy_.topology(), base.positions, changed_union, ws.ordered,
+            std::span(ws.moved.data(), n_changed), ws.fold_repair, ws.pool, kGrain);
+        timings_.fold_repair_ms += ms_since(t_folds);
         ws.pool.for_chunks(n_changed, kGrain, count_kept);
       } else {
         blend_and_reconstruct<DqOps>(links, level_count, std::span(ws.dq_users.data(), users),

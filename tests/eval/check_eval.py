@@ -37,10 +37,6 @@ KNOWN_LIMITS = {
     ("cast_plus_detail_torus", "stack"): "as the taper: a cast scales the height off the surface",
     ("four_artists_torus", "stack"): "as the taper: its regional cast scales the height",
     ("three_artists_mocap", "stack"): "as the taper: the grab's falloff shears the volume",
-    ("bend_plus_strong_detail_capsule", "folds"):
-        "both ideals fold the same faces: the 170-degree bend closes the strong detail on itself",
-    ("grab_plus_detail_engine_shipped", "folds"):
-        "tiny faces of the shipped engine's hard edges; the frame ideal folds them too",
 }
 
 

@@ -59,6 +59,10 @@ struct MergeTimings {
   /// an estimate of the bytes it read and wrote for them: the yardstick for `stream_ms`.
   std::uint64_t nodes_visited = 0;
   std::uint64_t bytes_touched = 0;
+  /// Faces the merge would have folded although no diff folds them, drawn back before the
+  /// result was written (`full` only; see fold_repair.h).
+  std::uint64_t new_folds_repaired = 0;
+  double fold_repair_ms = 0;  ///< looking for them (every merge) and repairing them (part of blend_ms)
 };
 
 /// Stateful merger: holds the hierarchy and a workspace that is reused across merges, so

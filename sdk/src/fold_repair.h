@@ -1,0 +1,51 @@
+// Internal: the last step of `full`'s position merge — no fold-overs the artists did not make.
+//
+// Carrying every displacement in the other edits' frames keeps details on bends and twists,
+// but where two strong edits overlap (a grab dragged over another artist's bump, a bend closed
+// on a detail) the combination can turn faces inside out although no artist's own edit did: a
+// visible crease or spike (folds.h has the definition every count uses). Such a face is
+// repaired where it appears: around its vertices the merged positions are drawn toward plain
+// addition of the edits there (the frames that carried one edit into another undone), then,
+// where that still folds, toward the edit that moves the region most; fully at the fold and
+// less with each ring of neighbours, more strongly on each attempt and over the neighbours of
+// any face still folded. It is local (a few rings around the faces), leaves every vertex away
+// from them bit-identical, and runs in the canonical order of the merge (so peers agree
+// bitwise).
+// Where nothing folds it costs one face test around each moved vertex and allocates nothing.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "csculpt/diff.h"
+#include "csculpt/hierarchy.h"
+#include "csculpt/mesh.h"
+#include "worker_pool.h"
+
+namespace csculpt::detail {
+
+/// Scratch reused across merges (no allocation once warm). Indices are into the moved list.
+struct FoldRepairScratch {
+  std::vector<std::uint32_t> slot;   ///< per vertex: index in the moved list; kNone between calls
+  std::vector<std::uint32_t> folds;  ///< faces currently folded anew
+  std::vector<std::vector<std::uint32_t>> chunk_folds;  ///< the first search's, per chunk
+  std::vector<std::uint8_t> seed;       ///< per moved vertex: on a folded face in some attempt
+  std::vector<std::uint32_t> ring;      ///< per moved vertex: rings from the nearest seed, or kNone
+  std::vector<std::uint32_t> part;      ///< per moved vertex in the region: its connected part
+  std::vector<std::uint32_t> dominant;  ///< per part: the diff moving it most
+  std::vector<double> energy;           ///< per diff: squared displacement over one part
+  std::vector<std::uint32_t> region, frontier, next;
+  std::vector<Vec3f> start;  ///< per moved vertex: its position when the current phase began
+};
+
+/// Repairs the new folds of the positions `moved` (one per vertex of `vertices`, increasing;
+/// every other vertex at its base position) in place. `diffs` are the merge's inputs. Returns
+/// the number of new folds found before the repair. The search for them runs over `pool` in
+/// chunks of `grain`; the repair itself, rare and local, on the calling thread.
+std::uint32_t repair_new_folds(const Topology& topology, std::span<const Vec3f> base,
+                               std::span<const std::uint32_t> vertices,
+                               std::span<const Diff* const> diffs, std::span<Vec3f> moved,
+                               FoldRepairScratch& scratch, WorkerPool& pool, std::size_t grain);
+
+}  // namespace csculpt::detail

@@ -1,0 +1,146 @@
+// The fold repair that ends `full`'s position merge (sdk/src/fold_repair.h): the merge turns
+// no face inside out that none of its diffs does, and the repair stays local.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <vector>
+
+#include "csculpt/diff.h"
+#include "csculpt/folds.h"
+#include "csculpt/hierarchy.h"
+#include "csculpt/io.h"
+#include "csculpt/merge.h"
+#include "fold_repair.h"
+
+namespace csculpt {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// An n x n grid of unit spacing in the z = 0 plane, triangles facing +z.
+Mesh grid(std::uint32_t n) {
+  Mesh m;
+  for (std::uint32_t y = 0; y < n; ++y)
+    for (std::uint32_t x = 0; x < n; ++x) m.positions.push_back({float(x), float(y), 0.f});
+  for (std::uint32_t y = 0; y + 1 < n; ++y)
+    for (std::uint32_t x = 0; x + 1 < n; ++x) {
+      const std::uint32_t v = y * n + x;
+      m.triangles.push_back({v, v + 1, v + n + 1});
+      m.triangles.push_back({v, v + n + 1, v + n});
+    }
+  return m;
+}
+
+Diff moving(const Mesh& base, std::uint32_t v, Vec3f by) {
+  Diff d;
+  d.vertex_count = static_cast<std::uint32_t>(base.vertex_count());
+  const Vec3f p = base.positions[v];
+  d.positions.indices = {v};
+  d.positions.values = {p.x + by.x, p.y + by.y, p.z + by.z};
+  return d;
+}
+
+std::uint32_t ring_distance(std::uint32_t n, std::uint32_t a, std::uint32_t b) {
+  const int dx = std::abs(int(a % n) - int(b % n)), dy = std::abs(int(a / n) - int(b / n));
+  return static_cast<std::uint32_t>(std::max(dx, dy));
+}
+
+// Two artists each push one vertex 0.6 of an edge to the right: neither folds a face; both
+// together (1.2 edges, as plain addition gives) do. The repair unfolds them, and every vertex
+// more than a few rings away keeps the merged position bit for bit.
+TEST(FoldRepair, UnfoldsWhatNoDiffFoldedAndStaysLocal) {
+  const std::uint32_t n = 21, c = 10 * n + 10;
+  const Mesh base = grid(n);
+  const Topology topology = Topology::build(std::uint32_t(base.vertex_count()), base.triangles);
+  const Diff a = moving(base, c, {0.6f, 0.f, 0.f});
+  const Diff b = moving(base, c, {0.6f, 0.f, 0.05f});
+  const Diff* diffs[] = {&a, &b};
+  ASSERT_EQ(count_new_folds(base, std::span(diffs), a), 0u);
+
+  // The merge's changed vertices: a band around c, all shifted a little, c by the sum.
+  std::vector<std::uint32_t> vertices;
+  std::vector<Vec3f> moved;
+  for (std::uint32_t v = 0; v < base.vertex_count(); ++v)
+    if (ring_distance(n, v, c) <= 6) {
+      vertices.push_back(v);
+      const Vec3f p = base.positions[v];
+      moved.push_back(v == c ? Vec3f{p.x + 1.2f, p.y, p.z + 0.05f} : Vec3f{p.x, p.y, p.z + 0.01f});
+    }
+  const std::vector<Vec3f> before = moved;
+  Diff merged;
+  merged.vertex_count = a.vertex_count;
+  merged.positions.indices = vertices;
+  for (const Vec3f& p : moved)
+    merged.positions.values.insert(merged.positions.values.end(), {p.x, p.y, p.z});
+  const std::uint32_t folds_before = count_new_folds(base, std::span(diffs), merged);
+  ASSERT_GT(folds_before, 0u);
+
+  detail::FoldRepairScratch scratch;
+  detail::WorkerPool pool(2);
+  const std::uint32_t found = detail::repair_new_folds(topology, base.positions, vertices,
+                                                       std::span(diffs), moved, scratch, pool, 4);
+  EXPECT_EQ(found, folds_before);
+  for (std::size_t i = 0; i < vertices.size(); ++i) {
+    float* out = merged.positions.values.data() + 3 * i;
+    out[0] = moved[i].x;
+    out[1] = moved[i].y;
+    out[2] = moved[i].z;
+  }
+  EXPECT_EQ(count_new_folds(base, std::span(diffs), merged), 0u);
+  for (std::size_t i = 0; i < vertices.size(); ++i)
+    if (ring_distance(n, vertices[i], c) > 4) {
+      EXPECT_EQ(moved[i], before[i]) << "vertex " << vertices[i] << " is far from the fold";
+    }
+  // What remains at c is at least one artist's push: the repair gave way, it did not erase.
+  const std::size_t ci =
+      std::size_t(std::find(vertices.begin(), vertices.end(), c) - vertices.begin());
+  EXPECT_GE(moved[ci].x - base.positions[c].x, 0.5f);
+
+  // The scratch is clean for the next call: the same call again gives the same result.
+  std::vector<Vec3f> again = before;
+  detail::repair_new_folds(topology, base.positions, vertices, std::span(diffs), again, scratch,
+                           pool, 4);
+  EXPECT_EQ(again, moved);
+}
+
+TEST(FoldRepair, NothingFoldedLeavesEveryPositionBitIdentical) {
+  const std::uint32_t n = 9, c = 4 * n + 4;
+  const Mesh base = grid(n);
+  const Topology topology = Topology::build(std::uint32_t(base.vertex_count()), base.triangles);
+  const Diff a = moving(base, c, {0.2f, 0.f, 0.3f});
+  const Diff* diffs[] = {&a};
+  std::vector<std::uint32_t> vertices = {c};
+  std::vector<Vec3f> moved = {{base.positions[c].x + 0.2f, base.positions[c].y, 0.3f}};
+  const std::vector<Vec3f> before = moved;
+  detail::FoldRepairScratch scratch;
+  detail::WorkerPool pool(1);
+  EXPECT_EQ(detail::repair_new_folds(topology, base.positions, vertices, std::span(diffs), moved,
+                                     scratch, pool, 4),
+            0u);
+  EXPECT_EQ(moved, before);
+}
+
+/// The authored cases whose frame-carrying merge folded faces no single edit folds: a strong
+/// detail closed on itself by a 170-degree bend, a grab over a detail on a shipped engine.
+TEST(FoldRepair, FullFoldsNothingNewOnTheAuthoredCasesThatFolded) {
+  for (const char* name : {"bend_plus_strong_detail_capsule", "grab_plus_detail_engine_shipped"}) {
+    const fs::path d = fs::path(CSCULPT_REPO_CASES) / name;
+    ASSERT_TRUE(fs::is_regular_file(d / "base.ply")) << d;
+    const Mesh base = read_mesh((d / "base.ply").string());
+    std::vector<Diff> diffs;
+    for (const char* e : {"a.ply", "b.ply"})
+      diffs.push_back(capture_diff(base, read_mesh((d / e).string())));
+    const Hierarchy h = Hierarchy::build(base);
+    Merger merger(h);
+    const Diff merged = merger.merge(base, std::span<const Diff>(diffs), MergeMethod::full);
+    EXPECT_GT(merger.last_timings().new_folds_repaired, 0u)
+        << name << ": the repair had nothing to do";
+    std::vector<const Diff*> inputs = {&diffs[0], &diffs[1]};
+    EXPECT_EQ(count_new_folds(h.topology(), base, inputs, merged), 0u) << name;
+  }
+}
+
+}  // namespace
+}  // namespace csculpt
