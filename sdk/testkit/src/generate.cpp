@@ -1,11 +1,11 @@
-#include "csculpt/generate.h"
+#include "csculpt/testkit/generate.h"
 
 #include <algorithm>
 #include <cmath>
 #include <map>
 
 #include "csculpt/dual_quat.h"
-#include "csculpt/random.h"
+#include "csculpt/testkit/random.h"
 #include "csculpt/vec3.h"
 
 namespace csculpt {
