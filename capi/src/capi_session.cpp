@@ -1,4 +1,5 @@
 // The C ABI of sessions (csc_session): create, join, submit, update, poll, statistics.
+#include <cmath>
 #include <cstring>
 #include <exception>
 #include <new>
