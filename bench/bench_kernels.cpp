@@ -5,9 +5,9 @@
 #include <cmath>
 #include <vector>
 
-#include "csculpt/generate.h"
 #include "csculpt/hierarchy.h"
 #include "csculpt/isometry.h"
+#include "csculpt/testkit/generate.h"
 
 namespace {
 

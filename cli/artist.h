@@ -8,9 +8,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "csculpt/generate.h"
 #include "csculpt/hierarchy.h"
 #include "csculpt/peer/session.h"
+#include "csculpt/testkit/generate.h"
 
 namespace csculpt::cli {
 

@@ -12,9 +12,9 @@
 #include <vector>
 
 #include "csculpt/diff.h"
-#include "csculpt/generate.h"
 #include "csculpt/hierarchy.h"
 #include "csculpt/merge.h"
+#include "csculpt/testkit/generate.h"
 
 namespace csculpt::cli {
 namespace {

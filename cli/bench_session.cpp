@@ -20,8 +20,8 @@
 #include <vector>
 
 #include "artist.h"
-#include "csculpt/generate.h"
 #include "csculpt/peer/session.h"
+#include "csculpt/testkit/generate.h"
 
 namespace csculpt::cli {
 namespace {
@@ -101,10 +101,17 @@ void peer_loop(BenchPeer& p, const std::atomic<bool>& stop) {
   }
 }
 
-/// One configuration; returns false (after printing why on stderr) if it could not be measured.
-bool run_configuration(const BenchSessionOptions& o, const Mesh& sphere, std::uint32_t n_peers) {
-  const auto t_setup = Clock::now();
-  std::vector<std::unique_ptr<BenchPeer>> peers;
+peer::SessionStats stats_of(const BenchPeer& p) {
+  std::lock_guard lock(p.mutex);
+  return p.stats;
+}
+
+using BenchPeers = std::vector<std::unique_ptr<BenchPeer>>;
+
+/// Peer 1 creates the session, the others join; waits until everyone sees everyone. False
+/// (after printing why) if they do not within 10 s.
+bool start_peers(const BenchSessionOptions& o, const Mesh& sphere, std::uint32_t n_peers,
+                 BenchPeers& peers) {
   for (std::uint32_t k = 0; k < n_peers; ++k) {
     auto p = std::make_unique<BenchPeer>();
     peer::SessionOptions so;
@@ -125,109 +132,155 @@ bool run_configuration(const BenchSessionOptions& o, const Mesh& sphere, std::ui
     for (const auto& p : peers) members &= p->session->stats().members == n_peers;
     if (!members) std::this_thread::sleep_for(Millis{5});
   }
-  if (!members) {
+  if (!members)
     std::fprintf(stderr, "bench session: %u peers did not all see each other in 10 s\n", n_peers);
-    return false;
-  }
-  const double setup_ms = ms_between(t_setup, Clock::now());
+  return members;
+}
 
-  std::atomic<bool> stop{false};
-  for (auto& p : peers) p->thread = std::thread(peer_loop, std::ref(*p), std::cref(stop));
-
-  std::mt19937_64 rng(o.seed);
-  std::uniform_real_distribution<double> phase(0.0, static_cast<double>(o.sync_ms));
+/// What the samples measured, and how many went wrong.
+struct Samples {
   std::vector<double> e2e, merge_ms, bytes, submit_ms, version_bytes, update_ms;
   std::uint32_t unsent = 0, failed = 0, extra_merges = 0;
-  constexpr std::uint32_t kWarmup = 2;
-  const Millis timeout{10000};
-  std::string error;
+};
+
+constexpr std::uint32_t kWarmup = 2;
+const Millis kSampleTimeout{10000};
+
+enum class Wait { complete, unsent, timed_out, error };
+
+/// Waits for the author's submit of `request` (into `rec`), then for every peer to hold the
+/// next version and the author to see its stroke acknowledged.
+Wait wait_for_sample(const BenchPeers& peers, BenchPeer& author, std::uint64_t request,
+                     const peer::SessionStats& author_before, SubmitRecord& rec,
+                     std::string& error) {
+  const auto deadline = Clock::now() + kSampleTimeout;
+  bool complete = false;
+  while (Clock::now() < deadline) {
+    {
+      std::lock_guard lock(author.mutex);
+      rec = author.submit;
+      if (!author.error.empty()) error = author.error;
+    }
+    if (!error.empty() || (rec.request == request && !rec.sent)) break;
+    if (rec.request == request) {
+      const std::uint64_t target = rec.base_version + 1;
+      bool all = true;
+      for (const auto& p : peers) {
+        std::lock_guard lock(p->mutex);
+        all &= p->version >= target;
+      }
+      std::lock_guard lock(author.mutex);
+      if (all && author.stats.strokes_acknowledged > author_before.strokes_acknowledged) {
+        complete = true;
+        break;
+      }
+    }
+    std::this_thread::sleep_for(Millis{1});
+  }
+  if (!error.empty()) return Wait::error;
+  if (rec.request == request && !rec.sent) return Wait::unsent;
+  return complete ? Wait::complete : Wait::timed_out;
+}
+
+/// Sample `s`'s figures (kept from the warm-up on only, but for its merge count).
+void record_sample(const BenchPeers& peers, const BenchPeer& author, const BenchPeer& merger,
+                   const SubmitRecord& rec, std::uint32_t s,
+                   const peer::SessionStats& author_before, const peer::SessionStats& merger_before,
+                   Samples& out) {
+  const auto n_peers = static_cast<std::uint32_t>(peers.size());
+  const std::uint64_t target = rec.base_version + 1;
+  double worst = 0;
+  for (const auto& p : peers) {
+    std::lock_guard lock(p->mutex);
+    worst = std::max(worst, ms_between(rec.at, p->applied_at.at(target)));
+    if (s >= kWarmup) out.update_ms.push_back(p->update_ms.at(target));
+  }
+  const peer::SessionStats author_after = stats_of(author);
+  const peer::SessionStats merger_after = stats_of(merger);
+  // Nobody else edits, so exactly one merge should lie between submit and arrival.
+  if (merger_after.merges != merger_before.merges + 1) ++out.extra_merges;
+  if (s < kWarmup) return;
+  out.e2e.push_back(worst);
+  out.submit_ms.push_back(rec.submit_ms);
+  out.bytes.push_back(static_cast<double>(author_after.submit_bytes - author_before.submit_bytes));
+  const std::uint64_t merges = merger_after.merges - merger_before.merges;
+  if (merges > 0) {
+    out.merge_ms.push_back((merger_after.merge_ms_sum - merger_before.merge_ms_sum) /
+                           static_cast<double>(merges));
+    out.version_bytes.push_back(
+        static_cast<double>(merger_after.version_bytes_sent - merger_before.version_bytes_sent) /
+        static_cast<double>(merges * (n_peers - 1 ? n_peers - 1 : 1)));
+  }
+}
+
+/// The samples, round robin over the submitting peer, each at a random phase of the sync
+/// interval; stops at the first error (into `error`) or when too many fail.
+Samples measure(const BenchSessionOptions& o, const BenchPeers& peers, std::string& error) {
+  const auto n_peers = static_cast<std::uint32_t>(peers.size());
+  std::mt19937_64 rng(o.seed);
+  std::uniform_real_distribution<double> phase(0.0, static_cast<double>(o.sync_ms));
+  Samples out;
   for (std::uint32_t s = 0; s < o.samples + kWarmup && error.empty();) {
     BenchPeer& author = *peers[s % n_peers];
     BenchPeer& merger = *peers[0];
     std::this_thread::sleep_for(
         std::chrono::duration<double, std::milli>(5.0 + phase(rng)));  // random tick phase
-    peer::SessionStats author_before, merger_before;
-    {
-      std::lock_guard lock(author.mutex);
-      author_before = author.stats;
-    }
-    {
-      std::lock_guard lock(merger.mutex);
-      merger_before = merger.stats;
-    }
+    const peer::SessionStats author_before = stats_of(author);
+    const peer::SessionStats merger_before = stats_of(merger);
     const std::uint64_t request = author.request.fetch_add(1) + 1;
-    // Wait for the submit, then for every peer to hold the next version and the author to
-    // see its stroke acknowledged.
-    const auto deadline = Clock::now() + timeout;
     SubmitRecord rec;
-    bool complete = false;
-    while (Clock::now() < deadline) {
-      {
-        std::lock_guard lock(author.mutex);
-        rec = author.submit;
-        if (!author.error.empty()) error = author.error;
-      }
-      if (!error.empty() || (rec.request == request && !rec.sent)) break;
-      if (rec.request == request) {
-        const std::uint64_t target = rec.base_version + 1;
-        bool all = true;
-        for (const auto& p : peers) {
-          std::lock_guard lock(p->mutex);
-          all &= p->version >= target;
-        }
-        std::lock_guard lock(author.mutex);
-        if (all && author.stats.strokes_acknowledged > author_before.strokes_acknowledged) {
-          complete = true;
-          break;
-        }
-      }
-      std::this_thread::sleep_for(Millis{1});
-    }
-    if (!error.empty()) break;
-    if (rec.request == request && !rec.sent) {
-      ++unsent;  // the stroke changed nothing the wire carries: take the next one
-      if (unsent > 10 * (o.samples + kWarmup)) break;
+    const Wait wait = wait_for_sample(peers, author, request, author_before, rec, error);
+    if (wait == Wait::error) break;
+    if (wait == Wait::unsent) {
+      ++out.unsent;  // the stroke changed nothing the wire carries: take the next one
+      if (out.unsent > 10 * (o.samples + kWarmup)) break;
       continue;
     }
-    if (!complete) {
-      ++failed;
+    if (wait == Wait::timed_out) {
+      ++out.failed;
       std::fprintf(stderr, "bench session: sample %u did not complete within %lld ms\n", s,
-                   static_cast<long long>(timeout.count()));
-      if (failed > 3) break;
+                   static_cast<long long>(kSampleTimeout.count()));
+      if (out.failed > 3) break;
       ++s;
       continue;
     }
-    const std::uint64_t target = rec.base_version + 1;
-    double worst = 0;
-    for (const auto& p : peers) {
-      std::lock_guard lock(p->mutex);
-      worst = std::max(worst, ms_between(rec.at, p->applied_at.at(target)));
-      if (s >= kWarmup) update_ms.push_back(p->update_ms.at(target));
-    }
-    peer::SessionStats author_after, merger_after;
-    {
-      std::lock_guard lock(author.mutex);
-      author_after = author.stats;
-    }
-    {
-      std::lock_guard lock(merger.mutex);
-      merger_after = merger.stats;
-    }
-    // Nobody else edits, so exactly one merge should lie between submit and arrival.
-    if (merger_after.merges != merger_before.merges + 1) ++extra_merges;
-    if (s++ < kWarmup) continue;
-    e2e.push_back(worst);
-    submit_ms.push_back(rec.submit_ms);
-    bytes.push_back(static_cast<double>(author_after.submit_bytes - author_before.submit_bytes));
-    const std::uint64_t merges = merger_after.merges - merger_before.merges;
-    if (merges > 0) {
-      merge_ms.push_back((merger_after.merge_ms_sum - merger_before.merge_ms_sum) /
-                         static_cast<double>(merges));
-      version_bytes.push_back(
-          static_cast<double>(merger_after.version_bytes_sent - merger_before.version_bytes_sent) /
-          static_cast<double>(merges * (n_peers - 1 ? n_peers - 1 : 1)));
-    }
+    record_sample(peers, author, merger, rec, s, author_before, merger_before, out);
+    ++s;
   }
+  return out;
+}
+
+void print_result(const BenchSessionOptions& o, const Mesh& sphere, std::uint32_t n_peers,
+                  const Samples& m, std::uint64_t dropped, double setup_ms) {
+  double bytes_sum = 0;
+  for (double b : m.bytes) bytes_sum += b;
+  std::printf(
+      "{\"bench\":\"session\",\"peers\":%u,\"faces\":%zu,\"vertices\":%zu,\"sync_ms\":%u,"
+      "\"samples\":%zu,\"e2e_ms_p50\":%.2f,\"e2e_ms_p90\":%.2f,\"e2e_ms_max\":%.2f,"
+      "\"merge_ms_p50\":%.2f,\"merge_ms_max\":%.2f,\"submit_ms_p50\":%.2f,\"update_ms_p50\":%.2f,"
+      "\"bytes_per_stroke\":%.0f,\"bytes_per_stroke_mean\":%.0f,\"version_bytes_p50\":%.0f,"
+      "\"failed\":%u,\"extra_merges\":%u,\"messages_dropped\":%llu,\"setup_ms\":%.0f,"
+      "\"cores\":%u}\n",
+      n_peers, sphere.face_count(), sphere.vertex_count(), o.sync_ms, m.e2e.size(),
+      quantile(m.e2e, 0.5), quantile(m.e2e, 0.9), quantile(m.e2e, 1.0), quantile(m.merge_ms, 0.5),
+      quantile(m.merge_ms, 1.0), quantile(m.submit_ms, 0.5), quantile(m.update_ms, 0.5),
+      quantile(m.bytes, 0.5), bytes_sum / static_cast<double>(m.bytes.size()),
+      quantile(m.version_bytes, 0.5), m.failed, m.extra_merges,
+      static_cast<unsigned long long>(dropped), setup_ms, std::thread::hardware_concurrency());
+  std::fflush(stdout);
+}
+
+/// One configuration; returns false (after printing why on stderr) if it could not be measured.
+bool run_configuration(const BenchSessionOptions& o, const Mesh& sphere, std::uint32_t n_peers) {
+  const auto t_setup = Clock::now();
+  BenchPeers peers;
+  if (!start_peers(o, sphere, n_peers, peers)) return false;
+  const double setup_ms = ms_between(t_setup, Clock::now());
+
+  std::atomic<bool> stop{false};
+  for (auto& p : peers) p->thread = std::thread(peer_loop, std::ref(*p), std::cref(stop));
+  std::string error;
+  const Samples samples = measure(o, peers, error);
   stop = true;
   for (auto& p : peers) p->thread.join();
   std::uint64_t dropped = 0;
@@ -236,26 +289,11 @@ bool run_configuration(const BenchSessionOptions& o, const Mesh& sphere, std::ui
     std::fprintf(stderr, "bench session: %s\n", error.c_str());
     return false;
   }
-  if (e2e.empty()) {
+  if (samples.e2e.empty()) {
     std::fprintf(stderr, "bench session: no sample completed with %u peers\n", n_peers);
     return false;
   }
-  double bytes_sum = 0;
-  for (double b : bytes) bytes_sum += b;
-  std::printf(
-      "{\"bench\":\"session\",\"peers\":%u,\"faces\":%zu,\"vertices\":%zu,\"sync_ms\":%u,"
-      "\"samples\":%zu,\"e2e_ms_p50\":%.2f,\"e2e_ms_p90\":%.2f,\"e2e_ms_max\":%.2f,"
-      "\"merge_ms_p50\":%.2f,\"merge_ms_max\":%.2f,\"submit_ms_p50\":%.2f,\"update_ms_p50\":%.2f,"
-      "\"bytes_per_stroke\":%.0f,\"bytes_per_stroke_mean\":%.0f,\"version_bytes_p50\":%.0f,"
-      "\"failed\":%u,\"extra_merges\":%u,\"messages_dropped\":%llu,\"setup_ms\":%.0f,"
-      "\"cores\":%u}\n",
-      n_peers, sphere.face_count(), sphere.vertex_count(), o.sync_ms, e2e.size(),
-      quantile(e2e, 0.5), quantile(e2e, 0.9), quantile(e2e, 1.0), quantile(merge_ms, 0.5),
-      quantile(merge_ms, 1.0), quantile(submit_ms, 0.5), quantile(update_ms, 0.5),
-      quantile(bytes, 0.5), bytes_sum / static_cast<double>(bytes.size()),
-      quantile(version_bytes, 0.5), failed, extra_merges, static_cast<unsigned long long>(dropped),
-      setup_ms, std::thread::hardware_concurrency());
-  std::fflush(stdout);
+  print_result(o, sphere, n_peers, samples, dropped, setup_ms);
   return true;
 }
 

@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "csculpt/diff.h"
-#include "csculpt/generate.h"
 #include "csculpt/hierarchy.h"
+#include "csculpt/testkit/generate.h"
 #include "csculpt/wire.h"
 
 namespace csculpt::cli {

@@ -10,15 +10,16 @@
 #include <exception>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "artist.h"
 #include "csculpt/folds.h"
-#include "csculpt/generate.h"
 #include "csculpt/io.h"
 #include "csculpt/peer/session.h"
+#include "csculpt/testkit/generate.h"
 
 namespace csculpt::cli {
 namespace {
@@ -205,160 +206,210 @@ void print_summary(const DemoOptions& o, const Mesh& sphere, const Summary& s) {
   std::fflush(stdout);
 }
 
+/// Live merge lines: whichever peer merges (the election may move it), from its counters.
+class MergeReporter {
+ public:
+  MergeReporter(std::uint32_t sessions, Clock::time_point t_edit)
+      : last_(sessions), t_edit_(t_edit) {}
+
+  void report(const std::vector<Published>& s) {
+    const auto sessions = static_cast<std::uint32_t>(last_.size());
+    std::uint64_t submits = 0, submit_bytes = 0, last_submits = 0, last_submit_bytes = 0;
+    for (std::uint32_t k = 0; k < sessions; ++k) {
+      submits += s[k].stats.submits;
+      submit_bytes += s[k].stats.submit_bytes;
+      last_submits += last_[k].submits;
+      last_submit_bytes += last_[k].submit_bytes;
+    }
+    bool printed = false;
+    for (std::uint32_t k = 0; k < sessions; ++k) {
+      const peer::SessionStats& now = s[k].stats;
+      const peer::SessionStats& before = last_[k];
+      if (now.merges <= before.merges) continue;
+      // The first line of a round carries the round's submits.
+      print_line(k, now, before, printed ? 0 : submits - last_submits,
+                 printed ? 0 : submit_bytes - last_submit_bytes);
+      printed = true;
+    }
+    if (printed)
+      for (std::uint32_t k = 0; k < sessions; ++k) last_[k] = s[k].stats;
+  }
+
+ private:
+  void print_line(std::uint32_t k, const peer::SessionStats& now, const peer::SessionStats& before,
+                  std::uint64_t submits, std::uint64_t submit_bytes) {
+    const std::uint64_t merges = now.merges - before.merges;
+    const std::uint32_t others = now.members > 0 ? now.members - 1 : 0;
+    // Each merge makes the next version. The counters are published a moment before the
+    // version number, so the number is counted here rather than read.
+    const std::uint64_t to = std::max(now.version, printed_version_ + merges);
+    printed_version_ = to;
+    const std::string label =
+        merges == 1 ? "version " + std::to_string(to)
+                    : "versions " + std::to_string(to - merges + 1) + "-" + std::to_string(to);
+    std::fprintf(
+        stderr,
+        "[%5.1f s] %s by %s: merge %.1f ms, %llu strokes (%llu conflicting), "
+        "%llu submits in (%.1f KB), %.1f KB out to %u peers\n",
+        seconds_between(t_edit_, Clock::now()), label.c_str(), peer_name(k).c_str(),
+        (now.merge_ms_sum - before.merge_ms_sum) / static_cast<double>(merges),
+        static_cast<unsigned long long>(now.merged_strokes - before.merged_strokes),
+        static_cast<unsigned long long>(now.conflicting_strokes - before.conflicting_strokes),
+        static_cast<unsigned long long>(submits), static_cast<double>(submit_bytes) / 1024.0,
+        static_cast<double>(now.version_bytes_sent - before.version_bytes_sent) / 1024.0, others);
+  }
+
+  std::vector<peer::SessionStats> last_;
+  std::uint64_t printed_version_ = 0;
+  Clock::time_point t_edit_;
+};
+
+/// One demo run, step by step: the sessions, the artist threads, editing, syncing until
+/// converged, then the final mesh and the summary.
+class DemoRun {
+ public:
+  DemoRun(const DemoOptions& o, const Mesh& sphere) : o_(o), sphere_(sphere) {
+    for (std::uint32_t k = 0; k < sessions_; ++k) peers_.push_back(std::make_unique<Peer>());
+  }
+
+  /// A creates the session; the others join with its invite (snapshot, then each builds the
+  /// merge hierarchy for itself). Until the artist threads start, this thread is every
+  /// session's host: it waits until everyone knows everyone (heartbeats spread membership),
+  /// so the first submits reach the merger.
+  void start_sessions(Clock::time_point t_start) {
+    peers_[0]->session = peer::Session::create(sphere_, session_options(o_, 0));
+    const std::string invite = peers_[0]->session->invite();
+    for (std::uint32_t k = 1; k < sessions_; ++k)
+      peers_[k]->session = peer::Session::join(invite, session_options(o_, k));
+    const auto members_deadline = Clock::now() + Millis{10000};
+    while (Clock::now() < members_deadline) {
+      bool all = true;
+      for (const auto& p : peers_) all &= p->session->stats().members == sessions_;
+      if (all) break;
+      std::this_thread::sleep_for(Millis{5});
+    }
+    setup_s_ = seconds_between(t_start, Clock::now());
+    const std::string replaying =
+        o_.replay ? " replaying " + std::to_string(o_.peers) + " artists' scripts" : "";
+    std::fprintf(stderr,
+                 "session: %u peers%s on a %zu-face sphere (%zu vertices), sync every %u ms, "
+                 "joined in %.2f s; invite %s\n",
+                 sessions_, replaying.c_str(), sphere_.face_count(), sphere_.vertex_count(),
+                 o_.sync_ms, setup_s_, invite.substr(0, invite.find(':') + 9).c_str());
+  }
+
+  /// The artist threads, which build their topology and stroke scripts in parallel.
+  void start_artists() {
+    for (std::uint32_t k = 0; k < sessions_; ++k)
+      peers_[k]->thread =
+          std::thread(artist_loop, std::ref(*peers_[k]), std::cref(o_), k, std::cref(phase_));
+    while (true) {
+      const auto s = published();
+      if (std::all_of(s.begin(), s.end(), [](const Published& p) { return p.ready; })) break;
+      std::this_thread::sleep_for(Millis{5});
+    }
+  }
+
+  /// The artists edit for o.seconds, then stop; syncing goes on until every peer holds the
+  /// same version and mesh (or the timeout). Returns whether they converged.
+  bool edit_and_sync() {
+    const auto t_edit = Clock::now();
+    reporter_.emplace(sessions_, t_edit);
+    const auto edit_end = t_edit + std::chrono::duration_cast<Clock::duration>(
+                                       std::chrono::duration<double>(o_.seconds));
+    phase_ = static_cast<int>(Phase::editing);
+    while (Clock::now() < edit_end) {
+      const auto s = published();
+      reporter_->report(s);
+      if (!check_errors(s)) break;
+      std::this_thread::sleep_for(Millis{10});
+    }
+    phase_ = static_cast<int>(Phase::syncing);
+    const auto t_sync = Clock::now();
+    const auto sync_deadline =
+        t_sync + std::chrono::duration_cast<Clock::duration>(
+                     std::chrono::duration<double>(o_.converge_timeout_seconds));
+    bool converged = false;
+    while (error_.empty() && Clock::now() < sync_deadline) {
+      const auto s = published();
+      reporter_->report(s);
+      if (!check_errors(s)) break;
+      if (all_converged(s)) {
+        converged = true;
+        break;
+      }
+      std::this_thread::sleep_for(Millis{10});
+    }
+    converge_s_ = seconds_between(t_sync, Clock::now());
+    phase_ = static_cast<int>(Phase::stop);
+    for (const auto& p : peers_) p->thread.join();
+    reporter_->report(published());
+    return converged;
+  }
+
+  /// With the artist threads done (this thread is every session's host again): the summary,
+  /// and the final mesh with its attribution colours written; then every peer leaves.
+  Summary finish(bool converged, Clock::time_point t_start) {
+    Summary sum = gather_summary(peers_);
+    const peer::Session& first = *peers_[0]->session;
+    Mesh final_mesh = peers_[0]->artist ? peers_[0]->artist->local() : first.base();
+    sum.opposed_face_pairs = count_opposed_face_pairs(final_mesh);
+    const ChannelDesc attribution{"attribution", 3, Linearisation::identity, 0.f, 1.f};
+    const int index = final_mesh.add_channel(attribution);
+    final_mesh.channels[static_cast<std::size_t>(index)].values =
+        peer::attribution_colours(first.attribution(), sphere_.vertex_count());
+    write_mesh(final_mesh, o_.out);
+    sum.version = first.version();
+    for (auto& p : peers_) p->artist.reset();
+    for (auto& p : peers_) p->session.reset();  // leave
+
+    if (!error_.empty()) std::fprintf(stderr, "csculpt: error: %s\n", error_.c_str());
+    std::fprintf(stderr, "%s after %.2f s of syncing; final mesh in %s\n",
+                 converged ? "converged" : "NOT converged", converge_s_, o_.out.c_str());
+    sum.converged = converged;
+    sum.converge_s = converge_s_;
+    sum.setup_s = setup_s_;
+    sum.wall_s = seconds_between(t_start, Clock::now());
+    return sum;
+  }
+
+  bool failed() const { return !error_.empty(); }
+
+ private:
+  std::vector<Published> published() const {
+    std::vector<Published> s;
+    for (const auto& p : peers_) s.push_back(p->snapshot());
+    return s;
+  }
+  /// Keeps the first artist's error; false once there is one.
+  bool check_errors(const std::vector<Published>& s) {
+    for (std::uint32_t k = 0; k < sessions_ && error_.empty(); ++k)
+      if (!s[k].error.empty()) error_ = peer_name(k) + ": " + s[k].error;
+    return error_.empty();
+  }
+
+  const DemoOptions& o_;
+  const Mesh& sphere_;
+  const std::uint32_t sessions_ = session_count(o_);
+  std::vector<std::unique_ptr<Peer>> peers_;
+  std::atomic<int> phase_{static_cast<int>(Phase::setup)};
+  std::optional<MergeReporter> reporter_;
+  std::string error_;
+  double setup_s_ = 0, converge_s_ = 0;
+};
+
 }  // namespace
 
 int run_demo(const DemoOptions& o) {
   const auto t_start = Clock::now();
   const Mesh sphere = make_sphere(o.faces, /*materials=*/true);
-  const std::size_t n = sphere.vertex_count();
-  const std::uint32_t sessions = session_count(o);
-  std::vector<std::unique_ptr<Peer>> peers;
-  for (std::uint32_t k = 0; k < sessions; ++k) peers.push_back(std::make_unique<Peer>());
-
-  // A creates the session; the others join with its invite (snapshot, then each builds the
-  // merge hierarchy for itself).
-  peers[0]->session = peer::Session::create(sphere, session_options(o, 0));
-  const std::string invite = peers[0]->session->invite();
-  for (std::uint32_t k = 1; k < sessions; ++k)
-    peers[k]->session = peer::Session::join(invite, session_options(o, k));
-  // Until the artist threads start, this thread is every session's host: wait until everyone
-  // knows everyone (heartbeats spread membership), so the first submits reach the merger.
-  const auto members_deadline = Clock::now() + Millis{10000};
-  while (Clock::now() < members_deadline) {
-    bool all = true;
-    for (const auto& p : peers) all &= p->session->stats().members == sessions;
-    if (all) break;
-    std::this_thread::sleep_for(Millis{5});
-  }
-  const double setup_s = seconds_between(t_start, Clock::now());
-  const std::string replaying =
-      o.replay ? " replaying " + std::to_string(o.peers) + " artists' scripts" : "";
-  std::fprintf(stderr,
-               "session: %u peers%s on a %zu-face sphere (%zu vertices), sync every %u ms, "
-               "joined in %.2f s; invite %s\n",
-               sessions, replaying.c_str(), sphere.face_count(), n, o.sync_ms, setup_s,
-               invite.substr(0, invite.find(':') + 9).c_str());
-
-  std::atomic<int> phase{static_cast<int>(Phase::setup)};
-  for (std::uint32_t k = 0; k < sessions; ++k)
-    peers[k]->thread =
-        std::thread(artist_loop, std::ref(*peers[k]), std::cref(o), k, std::cref(phase));
-  auto published = [&] {
-    std::vector<Published> s;
-    for (const auto& p : peers) s.push_back(p->snapshot());
-    return s;
-  };
-  while (true) {  // artists build their topology and stroke scripts in parallel
-    const auto s = published();
-    if (std::all_of(s.begin(), s.end(), [](const Published& p) { return p.ready; })) break;
-    std::this_thread::sleep_for(Millis{5});
-  }
-
-  const auto t_edit = Clock::now();
-  const auto edit_end = t_edit + std::chrono::duration_cast<Clock::duration>(
-                                     std::chrono::duration<double>(o.seconds));
-  phase = static_cast<int>(Phase::editing);
-
-  // Live merge lines: whichever peer merges (the election may move it), from its counters.
-  std::vector<peer::SessionStats> last(sessions);
-  std::uint64_t printed_version = 0;
-  auto report_merges = [&](const std::vector<Published>& s) {
-    std::uint64_t submits = 0, submit_bytes = 0, last_submits = 0, last_submit_bytes = 0;
-    for (std::uint32_t k = 0; k < sessions; ++k) {
-      submits += s[k].stats.submits;
-      submit_bytes += s[k].stats.submit_bytes;
-      last_submits += last[k].submits;
-      last_submit_bytes += last[k].submit_bytes;
-    }
-    bool printed = false;
-    for (std::uint32_t k = 0; k < sessions; ++k) {
-      const peer::SessionStats& now = s[k].stats;
-      const peer::SessionStats& before = last[k];
-      if (now.merges <= before.merges) continue;
-      const std::uint64_t merges = now.merges - before.merges;
-      const std::uint32_t others = now.members > 0 ? now.members - 1 : 0;
-      // Each merge makes the next version. The counters are published a moment before the
-      // version number, so the number is counted here rather than read.
-      const std::uint64_t to = std::max(now.version, printed_version + merges);
-      printed_version = to;
-      const std::string label =
-          merges == 1 ? "version " + std::to_string(to)
-                      : "versions " + std::to_string(to - merges + 1) + "-" + std::to_string(to);
-      std::fprintf(
-          stderr,
-          "[%5.1f s] %s by %s: merge %.1f ms, %llu strokes (%llu conflicting), "
-          "%llu submits in (%.1f KB), %.1f KB out to %u peers\n",
-          seconds_between(t_edit, Clock::now()), label.c_str(), peer_name(k).c_str(),
-          (now.merge_ms_sum - before.merge_ms_sum) / static_cast<double>(merges),
-          static_cast<unsigned long long>(now.merged_strokes - before.merged_strokes),
-          static_cast<unsigned long long>(now.conflicting_strokes - before.conflicting_strokes),
-          static_cast<unsigned long long>(printed ? 0 : submits - last_submits),
-          printed ? 0.0 : static_cast<double>(submit_bytes - last_submit_bytes) / 1024.0,
-          static_cast<double>(now.version_bytes_sent - before.version_bytes_sent) / 1024.0, others);
-      printed = true;
-    }
-    if (printed)
-      for (std::uint32_t k = 0; k < sessions; ++k) last[k] = s[k].stats;
-  };
-
-  std::string error;
-  auto check_errors = [&](const std::vector<Published>& s) {
-    for (std::uint32_t k = 0; k < sessions && error.empty(); ++k)
-      if (!s[k].error.empty()) error = peer_name(k) + ": " + s[k].error;
-    return error.empty();
-  };
-  while (Clock::now() < edit_end) {
-    const auto s = published();
-    report_merges(s);
-    if (!check_errors(s)) break;
-    std::this_thread::sleep_for(Millis{10});
-  }
-
-  // Editing stops; syncing goes on until every peer holds the same version and mesh.
-  phase = static_cast<int>(Phase::syncing);
-  const auto t_sync = Clock::now();
-  const auto sync_deadline =
-      t_sync + std::chrono::duration_cast<Clock::duration>(
-                   std::chrono::duration<double>(o.converge_timeout_seconds));
-  bool converged = false;
-  while (error.empty() && Clock::now() < sync_deadline) {
-    const auto s = published();
-    report_merges(s);
-    if (!check_errors(s)) break;
-    if (all_converged(s)) {
-      converged = true;
-      break;
-    }
-    std::this_thread::sleep_for(Millis{10});
-  }
-  const double converge_s = seconds_between(t_sync, Clock::now());
-  phase = static_cast<int>(Phase::stop);
-  for (const auto& p : peers) p->thread.join();
-  report_merges(published());
-
-  // The artist threads are done: this thread is every session's host again.
-  Summary sum = gather_summary(peers);
-  const peer::Session& first = *peers[0]->session;
-  Mesh final_mesh = peers[0]->artist ? peers[0]->artist->local() : first.base();
-  sum.opposed_face_pairs = count_opposed_face_pairs(final_mesh);
-  const ChannelDesc attribution{"attribution", 3, Linearisation::identity, 0.f, 1.f};
-  const int index = final_mesh.add_channel(attribution);
-  final_mesh.channels[static_cast<std::size_t>(index)].values =
-      peer::attribution_colours(first.attribution(), n);
-  write_mesh(final_mesh, o.out);
-  sum.version = first.version();
-  for (auto& p : peers) p->artist.reset();
-  for (auto& p : peers) p->session.reset();  // leave
-
-  if (!error.empty()) std::fprintf(stderr, "csculpt: error: %s\n", error.c_str());
-  std::fprintf(stderr, "%s after %.2f s of syncing; final mesh in %s\n",
-               converged ? "converged" : "NOT converged", converge_s, o.out.c_str());
-  sum.converged = converged;
-  sum.converge_s = converge_s;
-  sum.setup_s = setup_s;
-  sum.wall_s = seconds_between(t_start, Clock::now());
+  DemoRun run(o, sphere);
+  run.start_sessions(t_start);
+  run.start_artists();
+  const bool converged = run.edit_and_sync();
+  const Summary sum = run.finish(converged, t_start);
   print_summary(o, sphere, sum);
-  return converged && sum.lost == 0 && error.empty() ? 0 : 1;
+  return converged && sum.lost == 0 && !run.failed() ? 0 : 1;
 }
 
 CLI::App* add_demo_command(CLI::App& app, DemoOptions& o) {

@@ -14,7 +14,7 @@
 #include "csculpt/hierarchy.h"
 #include "csculpt/io.h"
 #include "csculpt/merge.h"
-#include "csculpt/scenarios.h"
+#include "csculpt/testkit/scenarios.h"
 #include "demo.h"
 #include "explain.h"
 #include "peer_command.h"
@@ -148,17 +148,7 @@ int run_scenarios(std::uint32_t faces, bool json) {
   return 0;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{"cSculpt: merge concurrent sculpting and painting edits of one mesh"};
-  app.require_subcommand(1);
-  app.set_version_flag("--version", "csculpt 0.1.0");
-
-  std::string base, edited;
-  std::uint32_t k = 7;
-
-  MergeCommand mc;
+CLI::App* add_merge_command(CLI::App& app, MergeCommand& mc) {
   auto* merge = app.add_subcommand("merge", "N-way merge of edits of BASE into OUT");
   merge->add_option("base", mc.base, "the last agreed mesh")->required()->check(CLI::ExistingFile);
   merge->add_option("edits", mc.edits, "two or more edited meshes (same connectivity)")
@@ -180,46 +170,53 @@ int main(int argc, char** argv) {
                    "shared/eval/score_merge.py does; repeatable")
       ->check(CLI::ExistingFile)
       ->needs(explain);
+  return merge;
+}
 
-  auto* hierarchy = app.add_subcommand("hierarchy", "hierarchy statistics of MESH (JSON)");
-  std::string mesh_path;
-  hierarchy->add_option("mesh", mesh_path, "mesh file")->required()->check(CLI::ExistingFile);
-  hierarchy->add_option("--k", k, "blended parents per node")
-      ->capture_default_str()
-      ->check(CLI::Range(1, 32));
+/// `hierarchy` and `diff`: statistics of one mesh or one edit.
+struct InspectCommands {
+  std::string mesh_path, base, edited;
+  std::uint32_t k = 7;
+  CLI::App* hierarchy = nullptr;
+  CLI::App* diff = nullptr;
 
-  auto* diff = app.add_subcommand("diff", "statistics of the edit from BASE to EDITED (JSON)");
-  diff->add_option("base", base, "base mesh")->required()->check(CLI::ExistingFile);
-  diff->add_option("edited", edited, "edited mesh")->required()->check(CLI::ExistingFile);
+  void add(CLI::App& app) {
+    hierarchy = app.add_subcommand("hierarchy", "hierarchy statistics of MESH (JSON)");
+    hierarchy->add_option("mesh", mesh_path, "mesh file")->required()->check(CLI::ExistingFile);
+    hierarchy->add_option("--k", k, "blended parents per node")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 32));
+    diff = app.add_subcommand("diff", "statistics of the edit from BASE to EDITED (JSON)");
+    diff->add_option("base", base, "base mesh")->required()->check(CLI::ExistingFile);
+    diff->add_option("edited", edited, "edited mesh")->required()->check(CLI::ExistingFile);
+  }
+};
 
-  // Session commands register their own options (cli/demo.cpp, cli/peer_command.cpp,
-  // cli/bench_session.cpp).
-  csculpt::cli::DemoOptions demo_options;
-  CLI::App* demo = csculpt::cli::add_demo_command(app, demo_options);
-  csculpt::cli::PeerCommandOptions peer_options;
-  CLI::App* peer = csculpt::cli::add_peer_command(app, peer_options);
+struct ScenarioCommand {
+  std::uint32_t faces = 40000;
+  bool json = false;
+};
 
+CLI::App* add_scenarios_command(CLI::App& app, ScenarioCommand& sc) {
   auto* scenarios = app.add_subcommand(
       "scenarios",
       "error of every merge method on the built-in scenarios (Markdown table or JSON)");
-  std::uint32_t scenario_faces = 40000;
-  bool scenario_json = false;
-  scenarios->add_option("--faces", scenario_faces, "sphere resolution")
+  scenarios->add_option("--faces", sc.faces, "sphere resolution")
       ->capture_default_str()
       ->check(CLI::Range(500u, 5000000u));
-  scenarios->add_flag("--json", scenario_json, "one JSON object per scenario and method");
+  scenarios->add_flag("--json", sc.json, "one JSON object per scenario and method");
+  return scenarios;
+}
 
-  auto* bench = app.add_subcommand("bench", "benchmarks (one JSON object per result)");
-  bench->require_subcommand(1);
-  csculpt::cli::BenchMergeOptions bo;
-  auto* bench_merge = bench->add_subcommand("merge", "merge speed on a built-in sphere");
+CLI::App* add_bench_merge_command(CLI::App& bench, csculpt::cli::BenchMergeOptions& bo) {
+  auto* bench_merge = bench.add_subcommand("merge", "merge speed on a built-in sphere");
   bench_merge->add_option("--faces", bo.faces, "approximate face count")
       ->capture_default_str()
       ->check(CLI::Range(20u, 50000000u));
   bench_merge->add_option("--users", bo.users, "concurrent edits")
       ->capture_default_str()
-      ->check(CLI::Range(1u, 64u));
-  bench_merge->add_option("--method", bo.method, "merge method")->capture_default_str();
+      ->check(CLI::Range(std::uint32_t{1}, static_cast<std::uint32_t>(max_merge_diffs)));
+  bench_merge->add_option("--method", bo.method, method_names())->capture_default_str();
   bench_merge->add_option("--k", bo.k, "blended parents per node")
       ->capture_default_str()
       ->check(CLI::Range(1u, 32u));
@@ -231,9 +228,11 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 1.0));
   bench_merge->add_flag("--paint", bo.paint, "add material channels and paint strokes");
   bench_merge->add_option("--seed", bo.seed, "stroke seed")->capture_default_str();
+  return bench_merge;
+}
 
-  csculpt::cli::BenchWireOptions bw;
-  auto* bench_wire = bench->add_subcommand(
+CLI::App* add_bench_wire_command(CLI::App& bench, csculpt::cli::BenchWireOptions& bw) {
+  auto* bench_wire = bench.add_subcommand(
       "wire", "size and encode/decode time of one stroke's diff message, per stroke kind");
   bench_wire->add_option("--faces", bw.faces, "approximate face count")
       ->capture_default_str()
@@ -249,19 +248,47 @@ int main(int argc, char** argv) {
   bench_wire->add_option("--repeat", bw.repeat, "timed repetitions (median reported)")
       ->capture_default_str()
       ->check(CLI::Range(1u, 10000u));
+  return bench_wire;
+}
 
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"cSculpt: merge concurrent sculpting and painting edits of one mesh"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "csculpt " CSCULPT_VERSION_STRING);
+
+  MergeCommand mc;
+  CLI::App* merge = add_merge_command(app, mc);
+  InspectCommands inspect;
+  inspect.add(app);
+  // Session commands register their own options (cli/demo.cpp, cli/peer_command.cpp,
+  // cli/bench_session.cpp).
+  csculpt::cli::DemoOptions demo_options;
+  CLI::App* demo = csculpt::cli::add_demo_command(app, demo_options);
+  csculpt::cli::PeerCommandOptions peer_options;
+  CLI::App* peer = csculpt::cli::add_peer_command(app, peer_options);
+  ScenarioCommand sc;
+  CLI::App* scenarios = add_scenarios_command(app, sc);
+
+  auto* bench = app.add_subcommand("bench", "benchmarks (one JSON object per result)");
+  bench->require_subcommand(1);
+  csculpt::cli::BenchMergeOptions bo;
+  CLI::App* bench_merge = add_bench_merge_command(*bench, bo);
+  csculpt::cli::BenchWireOptions bw;
+  CLI::App* bench_wire = add_bench_wire_command(*bench, bw);
   csculpt::cli::BenchSessionOptions bench_session_options;
   CLI::App* bench_session = csculpt::cli::add_bench_session_command(*bench, bench_session_options);
 
   CLI11_PARSE(app, argc, argv);
   try {
     if (*merge) return run_merge(mc);
-    if (*hierarchy) return run_hierarchy(mesh_path, k);
-    if (*diff) return run_diff(base, edited);
+    if (*inspect.hierarchy) return run_hierarchy(inspect.mesh_path, inspect.k);
+    if (*inspect.diff) return run_diff(inspect.base, inspect.edited);
     if (*demo) return csculpt::cli::run_demo(demo_options);
     if (*peer) return csculpt::cli::run_peer(peer_options);
     if (*bench_session) return csculpt::cli::bench_session(bench_session_options);
-    if (*scenarios) return run_scenarios(scenario_faces, scenario_json);
+    if (*scenarios) return run_scenarios(sc.faces, sc.json);
     if (*bench_merge) return csculpt::cli::bench_merge(bo);
     if (*bench_wire) return csculpt::cli::bench_wire(bw);
   } catch (const std::exception& e) {

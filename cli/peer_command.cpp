@@ -13,9 +13,9 @@
 
 #include "artist.h"
 #include "csculpt/error.h"
-#include "csculpt/generate.h"
 #include "csculpt/io.h"
 #include "csculpt/peer/session.h"
+#include "csculpt/testkit/generate.h"
 
 namespace csculpt::cli {
 namespace {
@@ -156,6 +156,173 @@ struct State {
   friend bool operator==(const State&, const State&) = default;
 };
 
+peer::SessionOptions session_options(const PeerCommandOptions& o) {
+  peer::SessionOptions so;
+  so.id = o.id;
+  so.bind = o.bind;
+  so.sync = peer::Millis{o.sync_ms};
+  so.membership = {peer::Millis{o.heartbeat_ms}, peer::Millis{o.evasive_ms},
+                   peer::Millis{o.expired_ms}};
+  so.name = o.name.empty() ? (o.id ? "peer-" + std::to_string(o.id) : "peer") : o.name;
+  return so;
+}
+
+/// Creates the session (on a built-in sphere) or joins the one of the invite, and prints the
+/// invite line.
+std::unique_ptr<peer::Session> open_session(const PeerCommandOptions& o,
+                                            const peer::SessionOptions& so) {
+  std::unique_ptr<peer::Session> session =
+      o.join.empty() ? peer::Session::create(make_sphere(o.faces, true), so)
+                     : peer::Session::join(o.join, so, peer::Millis{o.join_timeout_ms});
+  Line("invite")
+      .str("invite", session->invite())
+      .num("id", session->id())
+      .str("endpoint", session->endpoint())
+      .num("version", session->version())
+      .num("vertices", session->base().vertex_count())
+      .raw("t", now_ms())
+      .emit();
+  return session;
+}
+
+void print_event(const peer::Event& e, peer::PeerId self, SimulatedArtist& artist) {
+  Line line(kind_name(e.kind));
+  line.num("id", self).raw("t", now_ms());
+  switch (e.kind) {
+    case peer::EventKind::version:
+      line.num("version", e.version)
+          .num("merger", e.peer)
+          .num("epoch", e.epoch)
+          .raw("digest", hex64(peer::mesh_digest(artist.local())));
+      break;
+    case peer::EventKind::merger_changed:
+      line.num("merger", e.peer).num("epoch", e.epoch).num("version", e.version);
+      break;
+    case peer::EventKind::dropped:
+    case peer::EventKind::error:
+      line.str("reason", e.message).num("version", e.version);
+      break;
+    default:
+      line.num("peer", e.peer).num("version", e.version).str("detail", e.message);
+  }
+  line.emit();
+}
+
+State read_state(const peer::Session& session, SimulatedArtist& artist, bool editing) {
+  const peer::SessionStats st = session.stats();
+  State s;
+  s.version = session.version();
+  s.digest = peer::mesh_digest(artist.local());
+  s.base_digest = peer::mesh_digest(session.base());
+  s.strokes = artist.strokes();
+  s.unacknowledged = artist.unacknowledged();
+  s.acknowledged = st.strokes_acknowledged;
+  s.dropped = st.messages_dropped;
+  s.stale = st.stale_ignored;
+  s.auth_rejected = st.auth_rejected;
+  s.merger = st.merger;
+  s.epoch = st.epoch;
+  s.members = st.members;
+  s.editing = editing;
+  return s;
+}
+
+void print_state(const State& s, peer::PeerId self) {
+  Line("state")
+      .num("id", self)
+      .raw("t", now_ms())
+      .num("version", s.version)
+      .raw("digest", hex64(s.digest))
+      .raw("base_digest", hex64(s.base_digest))
+      .num("strokes", s.strokes)
+      .num("unacknowledged", s.unacknowledged)
+      .num("acknowledged", s.acknowledged)
+      .num("messages_dropped", s.dropped)
+      .num("stale_ignored", s.stale)
+      .num("auth_rejected", s.auth_rejected)
+      .num("merger", s.merger)
+      .num("epoch", s.epoch)
+      .num("members", s.members)
+      .raw("editing", s.editing ? "true" : "false")
+      .emit();
+}
+
+/// The artist edits until --seconds, syncing goes on until --linger more (or a signal, or
+/// `quit` on stdin); every event and every change of state is printed.
+void edit_and_sync(const PeerCommandOptions& o, peer::Session& session, SimulatedArtist& artist,
+                   peer::Clock::time_point start) {
+  StdinWatch input;
+  const auto edit_end = start + std::chrono::duration_cast<peer::Clock::duration>(
+                                    std::chrono::duration<double>(o.seconds));
+  const auto linger_end = edit_end + std::chrono::duration_cast<peer::Clock::duration>(
+                                         std::chrono::duration<double>(o.linger));
+  const peer::PeerId self = session.id();
+  State last;
+  bool first_state = true;
+  while (true) {
+    const auto now = peer::Clock::now();
+    const bool quit = g_signalled || (!o.ignore_stdin && input.quit_requested());
+    const bool editing = !quit && now < edit_end;
+    artist.step(now, editing);
+    for (const peer::Event& e : session.poll_events()) print_event(e, self, artist);
+    const State s = read_state(session, artist, editing);
+    if (first_state || !(s == last)) {
+      first_state = false;
+      last = s;
+      print_state(s, self);
+    }
+    if (quit || now >= linger_end) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(3));
+  }
+}
+
+/// The final mesh with an attribution channel.
+void write_final_mesh(const peer::Session& session, const Mesh& local, const std::string& path) {
+  Mesh out = local;
+  Channel colours;
+  colours.desc = ChannelDesc{"attribution", 3, Linearisation::identity, 0.f, 1.f};
+  colours.values = peer::attribution_colours(session.attribution(), local.vertex_count());
+  out.channels.push_back(std::move(colours));
+  write_mesh(out, path);
+}
+
+/// `lost`: the artist's strokes not seen inside a merged version.
+void print_summary(const peer::Session& session, const Mesh& local, std::uint32_t strokes,
+                   std::uint64_t lost, const peer::SessionStats& st, double seconds) {
+  Line("summary")
+      .num("id", session.id())
+      .raw("t", now_ms())
+      .num("version", session.version())
+      .raw("digest", hex64(peer::mesh_digest(local)))
+      .raw("base_digest", hex64(peer::mesh_digest(session.base())))
+      .num("strokes", strokes)
+      .num("strokes_submitted", st.strokes_submitted)
+      .num("acknowledged", st.strokes_acknowledged)
+      .num("lost_edits", lost)
+      .num("submits", st.submits)
+      .num("submit_bytes", st.submit_bytes)
+      .num("versions_applied", st.versions_applied)
+      .num("rebases", st.rebases)
+      .num("merges", st.merges)
+      .num("merged_strokes", st.merged_strokes)
+      .num("conflicting_strokes", st.conflicting_strokes)
+      .real("merge_ms_max", st.merge_ms_max)
+      .real("merge_ms_mean", st.merges ? st.merge_ms_sum / double(st.merges) : 0.0)
+      .num("version_bytes_sent", st.version_bytes_sent)
+      .num("messages_received", st.messages_received)
+      .num("bytes_received", st.bytes_received)
+      .num("messages_dropped", st.messages_dropped)
+      .num("stale_ignored", st.stale_ignored)
+      .num("auth_rejected", st.auth_rejected)
+      .num("snapshots_sent", st.snapshots_sent)
+      .num("fetches", st.fetches)
+      .num("epoch", st.epoch)
+      .num("merger", st.merger)
+      .num("members", st.members)
+      .real("seconds", seconds)
+      .emit();
+}
+
 }  // namespace
 
 CLI::App* add_peer_command(CLI::App& app, PeerCommandOptions& o) {
@@ -213,156 +380,24 @@ int run_peer(const PeerCommandOptions& o) {
     std::signal(SIGTERM, on_signal);
     std::signal(SIGPIPE, SIG_IGN);  // the driver may stop reading: keep going, leave cleanly
 
-    peer::SessionOptions so;
-    so.id = o.id;
-    so.bind = o.bind;
-    so.sync = peer::Millis{o.sync_ms};
-    so.membership = {peer::Millis{o.heartbeat_ms}, peer::Millis{o.evasive_ms},
-                     peer::Millis{o.expired_ms}};
-    so.name = o.name.empty() ? (o.id ? "peer-" + std::to_string(o.id) : "peer") : o.name;
-
-    std::unique_ptr<peer::Session> session =
-        o.join.empty() ? peer::Session::create(make_sphere(o.faces, true), so)
-                       : peer::Session::join(o.join, so, peer::Millis{o.join_timeout_ms});
-    const peer::PeerId self = session->id();
-    Line("invite")
-        .str("invite", session->invite())
-        .num("id", self)
-        .str("endpoint", session->endpoint())
-        .num("version", session->version())
-        .num("vertices", session->base().vertex_count())
-        .raw("t", now_ms())
-        .emit();
-
+    const peer::SessionOptions so = session_options(o);
+    std::unique_ptr<peer::Session> session = open_session(o, so);
     ArtistOptions ao;
     ao.seed = o.seed;
     ao.strokes_per_second = o.strokes_per_second;
     ao.submit_every = so.sync;
     SimulatedArtist artist(*session, ao);
-    StdinWatch input;
-
     const auto start = peer::Clock::now();
-    const auto edit_end = start + std::chrono::duration_cast<peer::Clock::duration>(
-                                      std::chrono::duration<double>(o.seconds));
-    const auto linger_end = edit_end + std::chrono::duration_cast<peer::Clock::duration>(
-                                           std::chrono::duration<double>(o.linger));
-    State last;
-    bool first_state = true;
-    while (true) {
-      const auto now = peer::Clock::now();
-      const bool quit = g_signalled || (!o.ignore_stdin && input.quit_requested());
-      const bool editing = !quit && now < edit_end;
-      artist.step(now, editing);
-
-      for (const peer::Event& e : session->poll_events()) {
-        Line line(kind_name(e.kind));
-        line.num("id", self).raw("t", now_ms());
-        switch (e.kind) {
-          case peer::EventKind::version:
-            line.num("version", e.version)
-                .num("merger", e.peer)
-                .num("epoch", e.epoch)
-                .raw("digest", hex64(peer::mesh_digest(artist.local())));
-            break;
-          case peer::EventKind::merger_changed:
-            line.num("merger", e.peer).num("epoch", e.epoch).num("version", e.version);
-            break;
-          case peer::EventKind::dropped:
-          case peer::EventKind::error:
-            line.str("reason", e.message).num("version", e.version);
-            break;
-          default:
-            line.num("peer", e.peer).num("version", e.version).str("detail", e.message);
-        }
-        line.emit();
-      }
-
-      const peer::SessionStats st = session->stats();
-      State s;
-      s.version = session->version();
-      s.digest = peer::mesh_digest(artist.local());
-      s.base_digest = peer::mesh_digest(session->base());
-      s.strokes = artist.strokes();
-      s.unacknowledged = artist.unacknowledged();
-      s.acknowledged = st.strokes_acknowledged;
-      s.dropped = st.messages_dropped;
-      s.stale = st.stale_ignored;
-      s.auth_rejected = st.auth_rejected;
-      s.merger = st.merger;
-      s.epoch = st.epoch;
-      s.members = st.members;
-      s.editing = editing;
-      if (first_state || !(s == last)) {
-        first_state = false;
-        last = s;
-        Line("state")
-            .num("id", self)
-            .raw("t", now_ms())
-            .num("version", s.version)
-            .raw("digest", hex64(s.digest))
-            .raw("base_digest", hex64(s.base_digest))
-            .num("strokes", s.strokes)
-            .num("unacknowledged", s.unacknowledged)
-            .num("acknowledged", s.acknowledged)
-            .num("messages_dropped", s.dropped)
-            .num("stale_ignored", s.stale)
-            .num("auth_rejected", s.auth_rejected)
-            .num("merger", s.merger)
-            .num("epoch", s.epoch)
-            .num("members", s.members)
-            .raw("editing", editing ? "true" : "false")
-            .emit();
-      }
-      if (quit || now >= linger_end) break;
-      std::this_thread::sleep_for(std::chrono::milliseconds(3));
-    }
+    edit_and_sync(o, *session, artist, start);
 
     // The summary describes the state at the end of editing and syncing; leaving then tells
     // the others at once rather than letting them wait for the expiry threshold.
     const peer::SessionStats st = session->stats();
     const Mesh& local = artist.local();
     const std::uint64_t lost = artist.unacknowledged();
-    if (!o.out.empty()) {
-      Mesh out = local;
-      Channel colours;
-      colours.desc = ChannelDesc{"attribution", 3, Linearisation::identity, 0.f, 1.f};
-      colours.values = peer::attribution_colours(session->attribution(), local.vertex_count());
-      out.channels.push_back(std::move(colours));
-      write_mesh(out, o.out);
-    }
+    if (!o.out.empty()) write_final_mesh(*session, local, o.out);
     const double seconds = std::chrono::duration<double>(peer::Clock::now() - start).count();
-    Line("summary")
-        .num("id", self)
-        .raw("t", now_ms())
-        .num("version", session->version())
-        .raw("digest", hex64(peer::mesh_digest(local)))
-        .raw("base_digest", hex64(peer::mesh_digest(session->base())))
-        .num("strokes", artist.strokes())
-        .num("strokes_submitted", st.strokes_submitted)
-        .num("acknowledged", st.strokes_acknowledged)
-        .num("lost_edits", lost)
-        .num("submits", st.submits)
-        .num("submit_bytes", st.submit_bytes)
-        .num("versions_applied", st.versions_applied)
-        .num("rebases", st.rebases)
-        .num("merges", st.merges)
-        .num("merged_strokes", st.merged_strokes)
-        .num("conflicting_strokes", st.conflicting_strokes)
-        .real("merge_ms_max", st.merge_ms_max)
-        .real("merge_ms_mean", st.merges ? st.merge_ms_sum / double(st.merges) : 0.0)
-        .num("version_bytes_sent", st.version_bytes_sent)
-        .num("messages_received", st.messages_received)
-        .num("bytes_received", st.bytes_received)
-        .num("messages_dropped", st.messages_dropped)
-        .num("stale_ignored", st.stale_ignored)
-        .num("auth_rejected", st.auth_rejected)
-        .num("snapshots_sent", st.snapshots_sent)
-        .num("fetches", st.fetches)
-        .num("epoch", st.epoch)
-        .num("merger", st.merger)
-        .num("members", st.members)
-        .real("seconds", seconds)
-        .emit();
+    print_summary(*session, local, artist.strokes(), lost, st, seconds);
     session->leave();
     return 0;
   } catch (const std::exception& e) {

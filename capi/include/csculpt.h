@@ -400,13 +400,16 @@ typedef struct csc_merge_options {
 CSC_API csc_status csc_merger_create(csc_merger** out, const csc_hierarchy* hierarchy);
 CSC_API void csc_merger_destroy(csc_merger* merger);
 
-/** Merges `count` diffs (1 to 64), each taken against `base`, into one diff from `base`
- *  (paper §3.1). The result depends only on `base` and the set of diffs: bit-identical for
- *  any order of `diffs`, on every run and every peer of the same build. Vertices no diff
- *  touches keep their exact base values and are not listed. `options` may be NULL (full,
- *  fitted frame). Changes `merger`'s workspace: one merge at a time per merger. Fails with
- *  CSC_ERROR_INVALID_INPUT if a diff does not fit `base` or `base` is not the hierarchy's
- *  mesh. */
+/** The most diffs one csc_merger_merge call merges. */
+#define CSC_MAX_MERGE_DIFFS 64
+
+/** Merges `count` diffs (1 to CSC_MAX_MERGE_DIFFS), each taken against `base`, into one diff
+ *  from `base` (paper §3.1). The result depends only on `base` and the set of diffs:
+ *  bit-identical for any order of `diffs`, on every run and every peer of the same build.
+ *  Vertices no diff touches keep their exact base values and are not listed. `options` may be
+ *  NULL (full, fitted frame). Changes `merger`'s workspace: one merge at a time per merger.
+ *  Fails with CSC_ERROR_INVALID_INPUT if a diff does not fit `base` or `base` is not the
+ *  hierarchy's mesh. */
 CSC_API csc_status csc_merger_merge(csc_merger* merger, csc_diff** out, const csc_mesh* base,
                                     const csc_diff* const* diffs, uint32_t count,
                                     const csc_merge_options* options);
@@ -446,7 +449,7 @@ typedef struct csc_session_options {
   const char* bind; /**< ZeroMQ endpoint to listen on; NULL: "tcp://127.0.0.1:*" (free port) */
   const char* name; /**< shown to others; NULL: "" */
   uint64_t id;      /**< this peer's id (the lowest live id merges); 0: random */
-  uint32_t sync_ms; /**< merge interval, 50 ms to minutes */
+  uint32_t sync_ms; /**< merge interval in ms, at least 1 (the paper used 5 s and 20 s) */
   uint32_t heartbeat_ms;
   uint32_t evasive_ms;       /**< silent this long: reported evasive */
   uint32_t expired_ms;       /**< silent this long: gone (a new merger is elected) */

@@ -122,6 +122,183 @@ void adjust_for_linear_precision(const Vec3f& x, std::span<WeightedParent> paren
     parents[k].weight = static_cast<float>(parents[k].weight / total);
 }
 
+/// What one level of the construction works in, reused from level to level.
+struct LevelScratch {
+  std::vector<std::uint32_t> new_index;  ///< coarse index of a selected node, else kNone
+  std::vector<std::uint8_t> has_parent;
+  std::vector<std::uint32_t> first_parent;
+  Csr provisional;  ///< each node's provisional parent set
+  std::vector<WeightedParent> gather;
+  std::vector<std::uint32_t> selected;  ///< the coarse nodes, as fine indices
+};
+
+/// Greedy selection in index order: a node without a parent becomes a coarse node and the
+/// parent of itself and all its neighbours. Returns the number of coarse nodes.
+std::uint32_t select_coarse_nodes(const Csr& adjacency, std::uint32_t n, LevelScratch& s) {
+  s.new_index.assign(n, kNone);
+  s.has_parent.assign(n, 0);
+  s.selected.clear();
+  for (std::uint32_t x = 0; x < n; ++x) {
+    if (s.has_parent[x]) continue;
+    s.new_index[x] = static_cast<std::uint32_t>(s.selected.size());
+    s.selected.push_back(x);
+    s.has_parent[x] = 1;
+    for (std::uint32_t y : adjacency.row(x)) s.has_parent[y] = 1;
+  }
+  return static_cast<std::uint32_t>(s.selected.size());
+}
+
+/// Provisional parent sets, sorted by coarse index (= creation order, so the first entry is
+/// the node's first parent).
+void provisional_parents(const Csr& adjacency, std::uint32_t n, LevelScratch& s) {
+  Csr& provisional = s.provisional;
+  provisional.offsets.assign(n + 1, 0);
+  for (std::uint32_t x = 0; x < n; ++x) {
+    std::uint32_t c = s.new_index[x] != kNone ? 1 : 0;
+    for (std::uint32_t y : adjacency.row(x)) c += s.new_index[y] != kNone ? 1 : 0;
+    provisional.offsets[x + 1] = c;
+  }
+  counts_to_offsets(provisional.offsets);
+  provisional.items.resize(provisional.offsets.back());
+  s.first_parent.resize(n);
+  for (std::uint32_t x = 0; x < n; ++x) {
+    std::uint32_t* out = provisional.items.data() + provisional.offsets[x];
+    std::uint32_t* const row_begin = out;
+    bool self_done = s.new_index[x] == kNone;
+    for (std::uint32_t y : adjacency.row(x)) {
+      if (!self_done && x < y) {
+        *out++ = s.new_index[x];
+        self_done = true;
+      }
+      if (s.new_index[y] != kNone) *out++ = s.new_index[y];
+    }
+    if (!self_done) *out++ = s.new_index[x];
+    s.first_parent[x] = *row_begin;
+  }
+}
+
+/// Horizontal links of the coarse level: between distinct first parents of linked nodes.
+Csr coarse_links(const Csr& adjacency, std::uint32_t n, std::uint32_t m,
+                 const std::vector<std::uint32_t>& first_parent) {
+  Csr coarse_adjacency;
+  coarse_adjacency.offsets.assign(m + 1, 0);
+  for (std::uint32_t x = 0; x < n; ++x)
+    for (std::uint32_t y : adjacency.row(x))
+      if (first_parent[y] != first_parent[x]) ++coarse_adjacency.offsets[first_parent[x] + 1];
+  counts_to_offsets(coarse_adjacency.offsets);
+  coarse_adjacency.items.resize(coarse_adjacency.offsets.back());
+  std::vector<std::uint32_t> cursor(coarse_adjacency.offsets.begin(),
+                                    coarse_adjacency.offsets.end() - 1);
+  for (std::uint32_t x = 0; x < n; ++x)
+    for (std::uint32_t y : adjacency.row(x))
+      if (first_parent[y] != first_parent[x])
+        coarse_adjacency.items[cursor[first_parent[x]]++] = first_parent[y];
+  sort_unique_rows(coarse_adjacency);
+  return coarse_adjacency;
+}
+
+/// The coarse level of `fine`'s `selected` nodes, empty of weights; `fine`'s parent arrays
+/// sized for K parents per node.
+HierarchyLevel begin_coarse_level(HierarchyLevel& fine, std::uint32_t K,
+                                  const std::vector<std::uint32_t>& selected) {
+  const std::uint32_t n = fine.node_count;
+  const auto m = static_cast<std::uint32_t>(selected.size());
+  fine.parent.assign(std::size_t{n} * K, 0);
+  fine.parent_weight.assign(std::size_t{n} * K, 0.f);
+  fine.parent_count.assign(n, 0);
+  HierarchyLevel coarse;
+  coarse.node_count = m;
+  coarse.child_weight_sum.assign(m, 0.f);
+  coarse.tree_child_count.assign(m, 0.f);
+  coarse.representative.resize(m);
+  for (std::uint32_t c = 0; c < m; ++c) coarse.representative[c] = fine.representative[selected[c]];
+  return coarse;
+}
+
+bool heavier(const WeightedParent& a, const WeightedParent& b) {
+  return a.weight != b.weight ? a.weight > b.weight : a.node < b.node;
+}
+
+/// Node x's parent set smoothed over its neighbours: the union of their provisional sets,
+/// each weighing 1 / its size, equal parents' weights summed (into s.gather).
+void smoothed_parents(const Csr& adjacency, std::uint32_t x, LevelScratch& s) {
+  std::vector<WeightedParent>& gather = s.gather;
+  gather.clear();
+  auto add_set = [&](std::uint32_t node) {
+    const auto row = s.provisional.row(node);
+    const float w = 1.f / static_cast<float>(row.size());
+    for (std::uint32_t p : row) gather.push_back({p, w});
+  };
+  add_set(x);
+  for (std::uint32_t y : adjacency.row(x)) add_set(y);
+  std::sort(gather.begin(), gather.end(), [](const WeightedParent& a, const WeightedParent& b) {
+    return a.node != b.node ? a.node < b.node : a.weight < b.weight;
+  });
+  std::size_t unique = 0;
+  for (std::size_t i = 0; i < gather.size(); ++i) {
+    if (unique > 0 && gather[unique - 1].node == gather[i].node)
+      gather[unique - 1].weight += gather[i].weight;
+    else
+      gather[unique++] = gather[i];
+  }
+  gather.resize(unique);
+}
+
+/// Trims s.gather to the K heaviest and normalises them; returns how many are kept. The
+/// normalisation to 1 before the trim does not change which K are heaviest, so the trim and
+/// one final normalisation give the paper's weights.
+std::size_t trim_parents(std::vector<WeightedParent>& gather, std::uint32_t K) {
+  const std::size_t keep = std::min<std::size_t>(K, gather.size());
+  std::partial_sort(gather.begin(), gather.begin() + static_cast<std::ptrdiff_t>(keep),
+                    gather.end(), heavier);
+  float total = 0;
+  for (std::size_t k = 0; k < keep; ++k) total += gather[k].weight;
+  for (std::size_t k = 0; k < keep; ++k) gather[k].weight /= total;
+  return keep;
+}
+
+/// Node x's K parent slots on `fine` from the first `keep` of `gather` (the rest: the first
+/// parent with weight 0), and their sums on `coarse`.
+void write_parents(HierarchyLevel& fine, HierarchyLevel& coarse, std::uint32_t x, std::uint32_t K,
+                   const std::vector<WeightedParent>& gather, std::size_t keep) {
+  std::uint32_t* parent = fine.parent.data() + std::size_t{x} * K;
+  float* weight = fine.parent_weight.data() + std::size_t{x} * K;
+  for (std::size_t k = 0; k < K; ++k) {
+    if (k < keep) {
+      parent[k] = gather[k].node;
+      weight[k] = gather[k].weight;
+      coarse.child_weight_sum[parent[k]] += weight[k];
+    } else {
+      parent[k] = gather[0].node;
+      weight[k] = 0.f;
+    }
+  }
+  fine.parent_count[x] = static_cast<std::uint8_t>(keep);
+  coarse.tree_child_count[parent[0]] += 1.f;
+}
+
+/// Every node's parents on `fine`: smoothed over its neighbours, trimmed to the K heaviest,
+/// renormalised (and, with `positions`, corrected for linear precision).
+void assign_parents(const Csr& adjacency, HierarchyLevel& fine, HierarchyLevel& coarse,
+                    std::uint32_t K, std::span<const Vec3f> positions, LevelScratch& s) {
+  for (std::uint32_t x = 0; x < fine.node_count; ++x) {
+    smoothed_parents(adjacency, x, s);
+    std::vector<WeightedParent>& gather = s.gather;
+    std::size_t keep = trim_parents(gather, K);
+    if (!positions.empty() && keep > 1) {
+      const Vec3f& self = positions[fine.representative[x]];
+      adjust_for_linear_precision(self, {gather.data(), keep},
+                                  [&](std::uint32_t node) -> const Vec3f& {
+                                    return positions[coarse.representative[node]];
+                                  });
+      // parents the adjustment clamped to zero are dropped; heaviest first again
+      std::sort(gather.begin(), gather.begin() + static_cast<std::ptrdiff_t>(keep), heavier);
+      while (keep > 1 && !(gather[keep - 1].weight > 0)) --keep;
+    }
+    write_parents(fine, coarse, x, K, gather, keep);
+  }
+}
+
 }  // namespace
 
 Topology Topology::build(std::uint32_t vertex_count, std::span<const Triangle> triangles) {
@@ -199,148 +376,17 @@ Hierarchy Hierarchy::build(std::uint32_t vertex_count, std::span<const Triangle>
   for (std::uint32_t v = 0; v < vertex_count; ++v) level0.representative[v] = v;
   h.levels_.push_back(std::move(level0));
 
-  std::vector<std::uint32_t> new_index;
-  std::vector<std::uint8_t> has_parent;
-  std::vector<std::uint32_t> first_parent;
-  Csr provisional;
-  std::vector<WeightedParent> gather;
-  std::vector<std::uint32_t> selected;
-
+  LevelScratch scratch;
   while (h.levels_.size() < options.max_levels) {
     HierarchyLevel& fine = h.levels_.back();
     const std::uint32_t n = fine.node_count;
-
-    // Greedy selection in index order: a node without a parent becomes a coarse node and
-    // the parent of itself and all its neighbours.
-    new_index.assign(n, kNone);
-    has_parent.assign(n, 0);
-    selected.clear();
-    for (std::uint32_t x = 0; x < n; ++x) {
-      if (has_parent[x]) continue;
-      new_index[x] = static_cast<std::uint32_t>(selected.size());
-      selected.push_back(x);
-      has_parent[x] = 1;
-      for (std::uint32_t y : adjacency.row(x)) has_parent[y] = 1;
-    }
-    const auto m = static_cast<std::uint32_t>(selected.size());
+    const std::uint32_t m = select_coarse_nodes(adjacency, n, scratch);
     if (m == n) break;  // one node per connected component: the construction is over
-
-    // Provisional parent sets, sorted by coarse index (= creation order, so the first
-    // entry is the node's first parent).
-    provisional.offsets.assign(n + 1, 0);
-    for (std::uint32_t x = 0; x < n; ++x) {
-      std::uint32_t c = new_index[x] != kNone ? 1 : 0;
-      for (std::uint32_t y : adjacency.row(x)) c += new_index[y] != kNone ? 1 : 0;
-      provisional.offsets[x + 1] = c;
-    }
-    counts_to_offsets(provisional.offsets);
-    provisional.items.resize(provisional.offsets.back());
-    first_parent.resize(n);
-    for (std::uint32_t x = 0; x < n; ++x) {
-      std::uint32_t* out = provisional.items.data() + provisional.offsets[x];
-      std::uint32_t* const row_begin = out;
-      bool self_done = new_index[x] == kNone;
-      for (std::uint32_t y : adjacency.row(x)) {
-        if (!self_done && x < y) {
-          *out++ = new_index[x];
-          self_done = true;
-        }
-        if (new_index[y] != kNone) *out++ = new_index[y];
-      }
-      if (!self_done) *out++ = new_index[x];
-      first_parent[x] = *row_begin;
-    }
-
-    // Horizontal links of the coarse level: between distinct first parents of linked nodes.
-    Csr coarse_adjacency;
-    coarse_adjacency.offsets.assign(m + 1, 0);
-    for (std::uint32_t x = 0; x < n; ++x)
-      for (std::uint32_t y : adjacency.row(x))
-        if (first_parent[y] != first_parent[x]) ++coarse_adjacency.offsets[first_parent[x] + 1];
-    counts_to_offsets(coarse_adjacency.offsets);
-    coarse_adjacency.items.resize(coarse_adjacency.offsets.back());
-    {
-      std::vector<std::uint32_t> cursor(coarse_adjacency.offsets.begin(),
-                                        coarse_adjacency.offsets.end() - 1);
-      for (std::uint32_t x = 0; x < n; ++x)
-        for (std::uint32_t y : adjacency.row(x))
-          if (first_parent[y] != first_parent[x])
-            coarse_adjacency.items[cursor[first_parent[x]]++] = first_parent[y];
-    }
-    sort_unique_rows(coarse_adjacency);
-
-    // Smooth the parent sets over neighbours, trim to the K heaviest, renormalise.
-    fine.parent.assign(std::size_t{n} * K, 0);
-    fine.parent_weight.assign(std::size_t{n} * K, 0.f);
-    fine.parent_count.assign(n, 0);
-    HierarchyLevel coarse;
-    coarse.node_count = m;
-    coarse.child_weight_sum.assign(m, 0.f);
-    coarse.tree_child_count.assign(m, 0.f);
-    coarse.representative.resize(m);
-    for (std::uint32_t c = 0; c < m; ++c)
-      coarse.representative[c] = fine.representative[selected[c]];
-
-    for (std::uint32_t x = 0; x < n; ++x) {
-      gather.clear();
-      auto add_set = [&](std::uint32_t node) {
-        const auto row = provisional.row(node);
-        const float w = 1.f / static_cast<float>(row.size());
-        for (std::uint32_t p : row) gather.push_back({p, w});
-      };
-      add_set(x);
-      for (std::uint32_t y : adjacency.row(x)) add_set(y);
-      std::sort(gather.begin(), gather.end(), [](const WeightedParent& a, const WeightedParent& b) {
-        return a.node != b.node ? a.node < b.node : a.weight < b.weight;
-      });
-      // merge equal parents (union with summed weights)
-      std::size_t unique = 0;
-      for (std::size_t i = 0; i < gather.size(); ++i) {
-        if (unique > 0 && gather[unique - 1].node == gather[i].node)
-          gather[unique - 1].weight += gather[i].weight;
-        else
-          gather[unique++] = gather[i];
-      }
-      gather.resize(unique);
-      // The normalisation to 1 before the trim does not change which K are heaviest, so the
-      // trim and one final normalisation give the paper's weights.
-      std::size_t keep = std::min<std::size_t>(K, gather.size());
-      std::partial_sort(gather.begin(), gather.begin() + static_cast<std::ptrdiff_t>(keep),
-                        gather.end(), [](const WeightedParent& a, const WeightedParent& b) {
-                          return a.weight != b.weight ? a.weight > b.weight : a.node < b.node;
-                        });
-      float total = 0;
-      for (std::size_t k = 0; k < keep; ++k) total += gather[k].weight;
-      std::uint32_t* parent = fine.parent.data() + std::size_t{x} * K;
-      float* weight = fine.parent_weight.data() + std::size_t{x} * K;
-      for (std::size_t k = 0; k < keep; ++k) gather[k].weight /= total;
-      if (precise && keep > 1) {
-        const Vec3f& self = positions[fine.representative[x]];
-        adjust_for_linear_precision(self, {gather.data(), keep},
-                                    [&](std::uint32_t node) -> const Vec3f& {
-                                      return positions[coarse.representative[node]];
-                                    });
-        // parents the adjustment clamped to zero are dropped; heaviest first again
-        std::sort(gather.begin(), gather.begin() + static_cast<std::ptrdiff_t>(keep),
-                  [](const WeightedParent& a, const WeightedParent& b) {
-                    return a.weight != b.weight ? a.weight > b.weight : a.node < b.node;
-                  });
-        while (keep > 1 && !(gather[keep - 1].weight > 0)) --keep;
-      }
-      for (std::size_t k = 0; k < K; ++k) {
-        if (k < keep) {
-          parent[k] = gather[k].node;
-          weight[k] = gather[k].weight;
-          coarse.child_weight_sum[parent[k]] += weight[k];
-        } else {
-          parent[k] = gather[0].node;
-          weight[k] = 0.f;
-        }
-      }
-      fine.parent_count[x] = static_cast<std::uint8_t>(keep);
-      coarse.tree_child_count[parent[0]] += 1.f;
-    }
-
+    provisional_parents(adjacency, n, scratch);
+    Csr coarse_adjacency = coarse_links(adjacency, n, m, scratch.first_parent);
+    HierarchyLevel coarse = begin_coarse_level(fine, K, scratch.selected);
+    assign_parents(adjacency, fine, coarse, K, precise ? positions : std::span<const Vec3f>{},
+                   scratch);
     adjacency = std::move(coarse_adjacency);
     h.levels_.push_back(std::move(coarse));
   }

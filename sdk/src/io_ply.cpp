@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <optional>
+#include <span>
 #include <unordered_map>
 #include <unordered_set>
 #include <utility>
@@ -245,11 +246,14 @@ struct Header {
   throw InvalidInput(cat(what, ": header line ", line, ": ", problem));
 }
 
-Header parse_header(std::string_view bytes, std::string_view what) {
-  Header h;
+/// A PLY header's lines, one at a time, with the current line's number for messages.
+struct HeaderLines {
+  std::string_view bytes;
+  std::string_view what;
   std::size_t pos = 0;
   std::size_t line_no = 0;
-  auto next_line = [&](std::string_view& line) {
+
+  bool next(std::string_view& line) {
     if (pos >= bytes.size()) return false;
     std::size_t nl = bytes.find('\n', pos);
     if (nl == std::string_view::npos) nl = bytes.size();
@@ -257,11 +261,87 @@ Header parse_header(std::string_view bytes, std::string_view what) {
     pos = nl + 1;
     ++line_no;
     return true;
-  };
-  auto fail = [&](const std::string& problem) { header_error(what, line_no, problem); };
+  }
+  [[noreturn]] void fail(const std::string& problem) const { header_error(what, line_no, problem); }
+};
 
+/// "comment csculpt linearisation <channel> <kind>" and "comment csculpt range <channel> <min>
+/// <max>" record a channel's linearisation and value range when they differ from the
+/// defaults for its name; other comments are skipped. `rest` follows "comment".
+void parse_comment(std::string_view rest, const HeaderLines& lines, Header& h) {
+  if (io_detail::next_token(rest) != "csculpt") return;
+  const std::string_view what_kind = io_detail::next_token(rest);
+  if (what_kind == "linearisation") {
+    const std::string_view channel = io_detail::next_token(rest);
+    const std::string_view kind = io_detail::next_token(rest);
+    try {
+      h.linearisations.emplace_back(std::string(channel), linearisation_from_string(kind));
+    } catch (const InvalidInput& e) {
+      lines.fail(e.what());
+    }
+  } else if (what_kind == "range") {
+    const std::string channel(io_detail::next_token(rest));
+    const std::string lo(io_detail::next_token(rest)), hi(io_detail::next_token(rest));
+    char* end_lo = nullptr;
+    char* end_hi = nullptr;
+    const float min_value = std::strtof(lo.c_str(), &end_lo);
+    const float max_value = std::strtof(hi.c_str(), &end_hi);
+    if (channel.empty() || lo.empty() || hi.empty() || *end_lo != 0 || *end_hi != 0 ||
+        std::isnan(min_value) || std::isnan(max_value) || min_value > max_value)
+      lines.fail("malformed 'comment csculpt range <channel> <min> <max>' line");
+    h.ranges.emplace_back(channel, std::make_pair(min_value, max_value));
+  }
+}
+
+Format parse_format(std::span<const std::string_view> tokens, const HeaderLines& lines) {
+  if (tokens.size() != 2) lines.fail("expected 'format <encoding> 1.0'");
+  if (tokens[0] == "ascii") return Format::ascii;
+  if (tokens[0] == "binary_little_endian") return Format::binary_le;
+  if (tokens[0] == "binary_big_endian") return Format::binary_be;
+  lines.fail(cat("unknown encoding ", quote(tokens[0]),
+                 " (expected ascii, binary_little_endian or binary_big_endian)"));
+}
+
+Element parse_element(std::span<const std::string_view> tokens, const HeaderLines& lines) {
+  if (tokens.size() != 2) lines.fail("expected 'element <name> <count>'");
+  Element e;
+  e.name = tokens[0];
+  if (!io_detail::parse_uint(tokens[1], e.count)) {
+    lines.fail(cat("bad element count ", quote(tokens[1])));
+  }
+  return e;
+}
+
+Property parse_property(std::span<const std::string_view> tokens, const HeaderLines& lines) {
+  Property p;
+  std::string_view type_name;
+  if (!tokens.empty() && tokens[0] == "list") {
+    if (tokens.size() != 4) lines.fail("expected 'property list <count type> <type> <name>'");
+    const auto count_type = scalar_from_name(tokens[1]);
+    if (!count_type) lines.fail(cat("unknown type ", quote(tokens[1])));
+    if (!is_integer(*count_type)) {
+      lines.fail(cat("list count type ", quote(tokens[1]), " is not an integer type"));
+    }
+    p.is_list = true;
+    p.count_type = *count_type;
+    type_name = tokens[2];
+    p.name = tokens[3];
+  } else {
+    if (tokens.size() != 2) lines.fail("expected 'property <type> <name>'");
+    type_name = tokens[0];
+    p.name = tokens[1];
+  }
+  const auto type = scalar_from_name(type_name);
+  if (!type) lines.fail(cat("unknown type ", quote(type_name)));
+  p.type = *type;
+  return p;
+}
+
+Header parse_header(std::string_view bytes, std::string_view what) {
+  Header h;
+  HeaderLines lines{bytes, what};
   std::string_view line;
-  if (!next_line(line) || io_detail::trim(line) != "ply") {
+  if (!lines.next(line) || io_detail::trim(line) != "ply") {
     throw InvalidInput(cat(what, ": not a PLY file (does not start with 'ply')"));
   }
   bool have_format = false;
@@ -269,96 +349,37 @@ Header parse_header(std::string_view bytes, std::string_view what) {
   // Sets rather than scans: a hostile header may declare a million properties.
   std::unordered_set<std::string> element_names;
   std::unordered_set<std::string> property_names;  // of the current element
-  while (!ended && next_line(line)) {
+  std::vector<std::string_view> tokens;
+  while (!ended && lines.next(line)) {
     std::string_view rest = line;
     const std::string_view keyword = io_detail::next_token(rest);
     if (keyword.empty() || keyword == "obj_info") continue;
     if (keyword == "comment") {
-      // "comment csculpt linearisation <channel> <kind>" and "comment csculpt range <channel>
-      // <min> <max>" record a channel's linearisation and value range when they differ from
-      // the defaults for its name.
-      std::string_view r = rest;
-      if (io_detail::next_token(r) != "csculpt") continue;
-      const std::string_view what_kind = io_detail::next_token(r);
-      if (what_kind == "linearisation") {
-        const std::string_view channel = io_detail::next_token(r);
-        const std::string_view kind = io_detail::next_token(r);
-        try {
-          h.linearisations.emplace_back(std::string(channel), linearisation_from_string(kind));
-        } catch (const InvalidInput& e) {
-          fail(e.what());
-        }
-      } else if (what_kind == "range") {
-        const std::string channel(io_detail::next_token(r));
-        const std::string lo(io_detail::next_token(r)), hi(io_detail::next_token(r));
-        char* end_lo = nullptr;
-        char* end_hi = nullptr;
-        const float min_value = std::strtof(lo.c_str(), &end_lo);
-        const float max_value = std::strtof(hi.c_str(), &end_hi);
-        if (channel.empty() || lo.empty() || hi.empty() || *end_lo != 0 || *end_hi != 0 ||
-            std::isnan(min_value) || std::isnan(max_value) || min_value > max_value)
-          fail("malformed 'comment csculpt range <channel> <min> <max>' line");
-        h.ranges.emplace_back(channel, std::make_pair(min_value, max_value));
-      }
+      parse_comment(rest, lines, h);
       continue;
     }
-    std::vector<std::string_view> tokens;
+    tokens.clear();
     for (std::string_view t = io_detail::next_token(rest); !t.empty();
          t = io_detail::next_token(rest)) {
       tokens.push_back(t);
     }
     if (keyword == "format") {
-      if (have_format) fail("second format line");
-      if (tokens.size() != 2) fail("expected 'format <encoding> 1.0'");
-      if (tokens[0] == "ascii") {
-        h.format = Format::ascii;
-      } else if (tokens[0] == "binary_little_endian") {
-        h.format = Format::binary_le;
-      } else if (tokens[0] == "binary_big_endian") {
-        h.format = Format::binary_be;
-      } else {
-        fail(cat("unknown encoding ", quote(tokens[0]),
-                 " (expected ascii, binary_little_endian or binary_big_endian)"));
-      }
+      if (have_format) lines.fail("second format line");
+      h.format = parse_format(tokens, lines);
       have_format = true;
     } else if (keyword == "element") {
-      if (tokens.size() != 2) fail("expected 'element <name> <count>'");
-      Element e;
-      e.name = tokens[0];
-      if (!io_detail::parse_uint(tokens[1], e.count)) {
-        fail(cat("bad element count ", quote(tokens[1])));
-      }
+      Element e = parse_element(tokens, lines);
       if (!element_names.insert(e.name).second) {
-        fail(cat("element ", quote(e.name), " declared twice"));
+        lines.fail(cat("element ", quote(e.name), " declared twice"));
       }
       property_names.clear();
       h.elements.push_back(std::move(e));
     } else if (keyword == "property") {
-      if (h.elements.empty()) fail("property before any element");
-      Property p;
-      std::string_view type_name;
-      if (!tokens.empty() && tokens[0] == "list") {
-        if (tokens.size() != 4) fail("expected 'property list <count type> <type> <name>'");
-        const auto count_type = scalar_from_name(tokens[1]);
-        if (!count_type) header_error(what, line_no, cat("unknown type ", quote(tokens[1])));
-        if (!is_integer(*count_type)) {
-          fail(cat("list count type ", quote(tokens[1]), " is not an integer type"));
-        }
-        p.is_list = true;
-        p.count_type = *count_type;
-        type_name = tokens[2];
-        p.name = tokens[3];
-      } else {
-        if (tokens.size() != 2) fail("expected 'property <type> <name>'");
-        type_name = tokens[0];
-        p.name = tokens[1];
-      }
-      const auto type = scalar_from_name(type_name);
-      if (!type) header_error(what, line_no, cat("unknown type ", quote(type_name)));
-      p.type = *type;
+      if (h.elements.empty()) lines.fail("property before any element");
+      Property p = parse_property(tokens, lines);
       Element& e = h.elements.back();
       if (!property_names.insert(p.name).second) {
-        fail(cat("property ", quote(p.name), " declared twice in element ", e.name));
+        lines.fail(cat("property ", quote(p.name), " declared twice in element ", e.name));
       }
       e.props.push_back(std::move(p));
     } else if (keyword == "end_header") {
@@ -369,8 +390,8 @@ Header parse_header(std::string_view bytes, std::string_view what) {
   }
   if (!ended) throw InvalidInput(cat(what, ": header has no end_header line"));
   if (!have_format) throw InvalidInput(cat(what, ": header has no format line"));
-  h.body_offset = std::min(pos, bytes.size());
-  h.body_line = line_no + 1;
+  h.body_offset = std::min(lines.pos, bytes.size());
+  h.body_line = lines.line_no + 1;
   return h;
 }
 

@@ -3,7 +3,7 @@
 #include <Eigen/Dense>
 #include <cmath>
 
-#include "vertex_isometry_kernel.h"
+#include "simd/vertex_isometry_kernel.h"
 
 namespace csculpt {
 namespace {

@@ -20,15 +20,15 @@
 #include <thread>
 #include <type_traits>
 
-#include "aligned_allocator.h"
-#include "blend_kernel.h"
 #include "csculpt/dual_quat.h"
 #include "csculpt/error.h"
-#include "dq_simd.h"
-#include "dq_soa.h"
 #include "fold_repair.h"
 #include "frame_transport.h"
-#include "vertex_isometry_kernel.h"
+#include "simd/aligned_allocator.h"
+#include "simd/blend_kernel.h"
+#include "simd/dq_simd.h"
+#include "simd/dq_soa.h"
+#include "simd/vertex_isometry_kernel.h"
 #include "worker_pool.h"
 
 namespace csculpt {
@@ -294,9 +294,9 @@ void mark_sorted_union(SparseLevel<Value>& level, std::size_t lists, ListOf&& li
                        std::vector<SoleChange>& sole) {
   constexpr std::uint32_t kEnd = 0xffffffffu;
   // The lists as raw ranges, read through cursors; an exhausted list reads kEnd.
-  const std::uint32_t* at[64];
-  const std::uint32_t* end[64];
-  const std::uint32_t* begin[64];
+  const std::uint32_t* at[max_merge_diffs];
+  const std::uint32_t* end[max_merge_diffs];
+  const std::uint32_t* begin[max_merge_diffs];
   std::size_t total = 0;
   for (std::size_t j = 0; j < lists; ++j) {
     const auto& l = list_of(j);
@@ -739,63 +739,40 @@ void with_translation_ops(TranslationBlend blend, Fn&& fn) {
   }
 }
 
-}  // namespace
-
-Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod method,
-                   const MergeFrame& frame) {
-  if (diffs.size() > kMaxDiffs)
-    throw InvalidInput("merge: " + std::to_string(diffs.size()) + " diffs given, at most " +
-                       std::to_string(kMaxDiffs) + " are merged at once");
-  std::array<const Diff*, kMaxDiffs> pointers{};
-  for (std::size_t i = 0; i < diffs.size(); ++i) pointers[i] = &diffs[i];
-  return merge(base, std::span<const Diff* const>(pointers.data(), diffs.size()), method, frame);
+void require_diff_count(std::size_t count) {
+  if (count > max_merge_diffs)
+    throw InvalidInput("merge: " + std::to_string(count) + " diffs given, at most " +
+                       std::to_string(max_merge_diffs) + " are merged at once");
 }
 
-Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMethod method,
-                   const MergeFrame& frame) {
-  const MethodTraits t = traits(method);
-  Workspace& ws = *workspace_;
-  timings_ = {};
-  // Per node visited: its value and its parent links (index + weight); its bit is noise.
-  auto count_work = [&](const auto& user_pyramids, std::uint32_t user_count,
-                        const auto& merged_pyramid, std::size_t levels, std::size_t value_bytes) {
-    const std::size_t per_node = value_bytes + hierarchy_.stride() * 8;
-    auto add = [&](const auto& pyramid) {
-      for (std::size_t i = 0; i < levels; ++i) {
-        timings_.nodes_visited += pyramid.levels[i].list.size();
-        timings_.bytes_touched += pyramid.levels[i].list.size() * per_node;
-      }
-    };
-    for (std::uint32_t u = 0; u < user_count; ++u) add(user_pyramids[u]);
-    add(merged_pyramid);
-    for (const Diff* d : diffs) timings_.bytes_touched += d->positions.indices.size() * 16;
-  };
-  if (base.vertex_count() != hierarchy_.topology().vertex_count)
+/// The base must be the mesh the hierarchy was built for: the same vertex count, and a
+/// sampled check of the triangles (count, ends and 1024 strided triangles): O(1) per merge,
+/// and a mesh of other connectivity with the same vertex count is caught all the same.
+void require_hierarchy_mesh(const Hierarchy& hierarchy, const Mesh& base) {
+  if (base.vertex_count() != hierarchy.topology().vertex_count)
     throw InvalidInput("merge: the mesh has " + std::to_string(base.vertex_count()) +
                        " vertices but the hierarchy was built for " +
-                       std::to_string(hierarchy_.topology().vertex_count));
-  {
-    // A sampled check (count, ends and 1024 strided triangles): O(1) per merge, and a mesh
-    // of other connectivity with the same vertex count is caught all the same.
-    const auto& mine = hierarchy_.topology().triangles;
-    bool same = base.triangles.size() == mine.size();
-    const std::size_t n = mine.size();
-    for (std::size_t k = 0; same && n > 0 && k <= 1024; ++k) {
-      const std::size_t f = k == 1024 ? n - 1 : k * n / 1024;
-      same = base.triangles[f] == mine[f];
-    }
-    if (!same)
-      throw InvalidInput(
-          "merge: the mesh's triangles differ from those the hierarchy was built for");
+                       std::to_string(hierarchy.topology().vertex_count));
+  const auto& mine = hierarchy.topology().triangles;
+  bool same = base.triangles.size() == mine.size();
+  const std::size_t n = mine.size();
+  for (std::size_t k = 0; same && n > 0 && k <= 1024; ++k) {
+    const std::size_t f = k == 1024 ? n - 1 : k * n / 1024;
+    same = base.triangles[f] == mine[f];
   }
-  if (diffs.size() > kMaxDiffs)
-    throw InvalidInput("merge: " + std::to_string(diffs.size()) + " diffs given, at most " +
-                       std::to_string(kMaxDiffs) + " are merged at once");
-  // Each diff validated and digested in parallel (read-only); the first invalid one in
-  // argument order throws, as a serial loop would.
-  std::exception_ptr invalid[kMaxDiffs];
-  std::uint64_t keys[kMaxDiffs] = {};
-  ws.pool.run(diffs.size(), [&](std::size_t i) {
+  if (!same)
+    throw InvalidInput("merge: the mesh's triangles differ from those the hierarchy was built for");
+}
+
+using DiffKeys = std::array<std::uint64_t, max_merge_diffs>;
+
+/// Each diff validated and digested in parallel (read-only); the first invalid one in
+/// argument order throws, as a serial loop would. Returns each diff's digest().
+DiffKeys validate_and_digest(detail::WorkerPool& pool, const Mesh& base,
+                             std::span<const Diff* const> diffs) {
+  std::exception_ptr invalid[max_merge_diffs];
+  DiffKeys keys{};
+  pool.run(diffs.size(), [&](std::size_t i) {
     try {
       validate(*diffs[i], base, "diff " + std::to_string(i));
       keys[i] = digest(*diffs[i]);
@@ -805,302 +782,466 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
   });
   for (std::size_t i = 0; i < diffs.size(); ++i)
     if (invalid[i]) std::rethrow_exception(invalid[i]);
+  return keys;
+}
+
+void require_valid_frame(const MergeFrame& frame) {
   if (!(frame.scale > 0) || !std::isfinite(frame.scale))
     throw InvalidInput("merge: the frame scale must be positive and finite");
+}
 
-  const std::vector<std::size_t> order =
-      canonical_order(diffs, std::span<const std::uint64_t>(keys, diffs.size()));
-  const auto users = static_cast<std::uint32_t>(diffs.size());
-  const std::size_t level_count = t.multiscale ? hierarchy_.levels().size() : 1;
-  const ParentLinks links{&hierarchy_, t.tree};
+const std::vector<std::uint32_t> kNoChanges;
+
+}  // namespace
+
+/// One merge of validated diffs, step by step: the positions (as isometries, or as
+/// translations), then each channel. Holds what every step reads; writes only the Merger's
+/// workspace and timings.
+struct Merger::Pass {
+  using Lookup = Workspace::Lookup;
+
+  const Hierarchy& hierarchy;
+  Workspace& ws;
+  MergeTimings& timings;
+  const Mesh& base;
+  std::span<const Diff* const> diffs;
+  const MethodTraits t;
+  const std::vector<std::size_t> order;  ///< canonical: diff u of the merge is diffs[order[u]]
+  const MergeFrame frame;
+  const std::uint32_t users = static_cast<std::uint32_t>(diffs.size());
+  const std::size_t level_count = t.multiscale ? hierarchy.levels().size() : 1;
+  const ParentLinks links{&hierarchy, t.tree};
   const std::uint32_t vertex_count = static_cast<std::uint32_t>(base.vertex_count());
+  const detail::Frame local{frame.center, 1.f / frame.scale};
 
+  Diff run();
+
+ private:
+  const AttributeDiff& positions_of(std::size_t u) const { return diffs[order[u]]->positions; }
+  Vec3f from_local(const Vec3f& p) const {
+    return Vec3f{p.x * frame.scale + frame.center.x, p.y * frame.scale + frame.center.y,
+                 p.z * frame.scale + frame.center.z};
+  }
+  template <class UserPyramids, class MergedPyramid>
+  void count_work(const UserPyramids& user_pyramids, const MergedPyramid& merged_pyramid,
+                  std::size_t levels, std::size_t value_bytes);
+  void prepare_lookups();
+
+  // positions as isometries
+  void isometry_positions(AttributeDiff& out, Clock::time_point t0);
+  void isometries_and_averages(Clock::time_point t0);
+  double diff_isometries(std::size_t u);
+  void blend_isometries(std::size_t kept_chunks);
+  void transport_positions();
+  void repair_folds(std::span<const std::uint32_t> changed, std::span<Vec3f> moved);
+  void count_kept(std::size_t begin, std::size_t end);
+  void list_moved_positions(AttributeDiff& out, std::size_t chunks);
+
+  // positions as translations
+  template <class Ops>
+  void translation_positions(AttributeDiff& out, Clock::time_point t0);
+  template <class Ops>
+  void list_translated_positions(AttributeDiff& out) const;
+
+  // channels: translations in each channel's linear space
+  ChannelDiff merge_channel(const Channel& channel);
+  template <class Ops>
+  void channel_translations(const Channel& channel, std::size_t channel_levels,
+                            std::span<const std::vector<std::uint32_t>*> changed_lists,
+                            std::span<const float*> changed_values);
+  template <class Ops>
+  void list_channel_result(const Channel& channel, std::size_t channel_levels,
+                           std::span<const float* const> changed_values,
+                           ChannelDiff& out_diff) const;
+};
+
+Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod method,
+                   const MergeFrame& frame) {
+  require_diff_count(diffs.size());  // before the pointers are taken
+  std::array<const Diff*, max_merge_diffs> pointers{};
+  for (std::size_t i = 0; i < diffs.size(); ++i) pointers[i] = &diffs[i];
+  return merge(base, std::span<const Diff* const>(pointers.data(), diffs.size()), method, frame);
+}
+
+Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMethod method,
+                   const MergeFrame& frame) {
+  const MethodTraits t = traits(method);
+  timings_ = {};
+  require_hierarchy_mesh(hierarchy_, base);
+  require_diff_count(diffs.size());
+  const DiffKeys keys = validate_and_digest(workspace_->pool, base, diffs);
+  require_valid_frame(frame);
+  Pass pass{hierarchy_,
+            *workspace_,
+            timings_,
+            base,
+            diffs,
+            t,
+            canonical_order(diffs, std::span<const std::uint64_t>(keys.data(), diffs.size())),
+            frame};
+  return pass.run();
+}
+
+Diff Merger::Pass::run() {
   Diff merged;
   merged.vertex_count = vertex_count;
   if (users == 0) {
     for (const Channel& c : base.channels) merged.channels.push_back({c.desc, {}});
     return merged;
   }
-
-  detail::Frame local{frame.center, 1.f / frame.scale};
-  auto from_local = [&](const Vec3f& p) {
-    return Vec3f{p.x * frame.scale + frame.center.x, p.y * frame.scale + frame.center.y,
-                 p.z * frame.scale + frame.center.z};
-  };
-
   if (ws.lookups.size() < users) ws.lookups.resize(users);
-
-  // ---- positions ----
-  {
-    auto t0 = Clock::now();
-    // edited-position lookups per diff (filled in the diff's own task below)
-    for (std::uint32_t u = 0; u < users; ++u) {
-      auto& lk = ws.lookups[u];
-      if (lk.slot.size() < vertex_count) lk.slot.resize(vertex_count);
-      lk.changed.resize(vertex_count);
-    }
-    auto edited_of = [&](std::uint32_t u) {
-      const auto& lk = ws.lookups[u];
-      const AttributeDiff& pd = diffs[order[u]]->positions;
-      return [&lk, &pd, &base](std::uint32_t v) -> Vec3f {
-        if (!lk.changed.test(v)) return base.positions[v];
-        const float* p = pd.values.data() + 3 * std::size_t{lk.slot[v]};
-        return {p[0], p[1], p[2]};
-      };
-    };
-    if (t.isometry) {
-      if (ws.dq_users.size() < users) ws.dq_users.resize(users);
-      for (std::uint32_t u = 0; u < users; ++u) ws.dq_users[u].begin(hierarchy_, level_count);
-      ws.dq_merged.begin(hierarchy_, level_count);
-      // One region, one task per diff (its lookup, isometries and averages: independent of
-      // the other diffs), plus one task, listed last so that the thread that finishes first
-      // takes it, for the vertices the result needs (the union of the changed ones): it
-      // writes only the merged pyramid's level 0, so no barrier between.
-      double iso_task_ms[kMaxDiffs] = {};
-      ws.pool.run(users + 1, [&](std::size_t u) {
-        if (u == users) {
-          mark_union(
-              ws.dq_merged.levels[0], users, [&](std::size_t j) -> const auto& {
-                return diffs[order[j]]->positions.indices;
-              });
-          return;
-        }
-        const auto task_t0 = Clock::now();
-        auto& lk = ws.lookups[u];
-        const AttributeDiff& pd = diffs[order[u]]->positions;
-        for (std::uint32_t i = 0; i < pd.indices.size(); ++i) {
-          lk.slot[pd.indices[i]] = i;
-          lk.changed.insert(pd.indices[i]);
-        }
-        lk.isometry.resize(vertex_count, base.face_count());
-        auto& level0 = ws.dq_users[u].levels[0];
-        detail::compute_vertex_isometries(
-            hierarchy_.topology(), base.positions, pd.indices,
-            edited_of(static_cast<std::uint32_t>(u)), lk.isometry,
-            [&level0](std::uint32_t v, const DualQuat& q) {
-              level0.values[v] = q;
-              level0.set(v);
-            },
-            lk.touched, local);
-        if (!t.transport) lk.changed.clear(pd.indices);  // the transport reads it below
-        level0.list.assign(lk.touched.begin(), lk.touched.end());
-        iso_task_ms[u] = ms_since(task_t0);
-        decompose<DqOps>(links, level_count, ws.dq_users[u]);
-      });
-      mark_coarse_union<DualQuat>(std::span(ws.dq_users.data(), users), level_count, ws.dq_merged);
-      // The region's time split: isometries = the longest diff's isometry part, the rest
-      // (decomposition and its imbalance) to decompose.
-      const double region_ms = ms_since(t0);
-      const double iso_ms = *std::max_element(iso_task_ms, iso_task_ms + users);
-      timings_.isometry_ms += std::min(iso_ms, region_ms);
-      timings_.decompose_ms += std::max(0.0, region_ms - iso_ms);
-      t0 = Clock::now();
-      // Moved positions and, per chunk, how many differ from the base, computed by the blend
-      // as soon as each chunk of level 0 is done; then each chunk lists its own at its offset
-      // (the prefix sum of the counts): the same order as one serial pass, every write
-      // disjoint.
-      const auto& changed_union = ws.dq_merged.levels[0].list;  // increasing
-      const std::size_t n_changed = changed_union.size();
-      constexpr std::size_t kGrain = kBlendGrain;
-      const std::size_t chunks = (n_changed + kGrain - 1) / kGrain;
-      if (ws.moved.size() < n_changed) ws.moved.resize(n_changed);
-      if (ws.chunk_offset.size() < chunks + 1) ws.chunk_offset.resize(chunks + 1);
-      auto count_kept = [&](std::size_t begin, std::size_t end) {
-        std::size_t kept = 0;
-        for (std::size_t i = begin; i < end; ++i)
-          kept += !(ws.moved[i] == base.positions[changed_union[i]]);
-        ws.chunk_offset[begin / kGrain + 1] = kept;
-      };
-      const std::function<void(std::size_t, std::size_t)> move_vertices = [&](std::size_t begin,
-                                                                              std::size_t end) {
-        for (std::size_t i = begin; i < end; ++i) {
-          const std::uint32_t v = changed_union[i];
-          ws.moved[i] =
-              from_local(ws.dq_merged.levels[0].val(v).apply(local.to_local(base.positions[v])));
-        }
-        count_kept(begin, end);
-      };
-      if (t.transport) {
-        ws.transport_inputs.resize(users);
-        for (std::uint32_t u = 0; u < users; ++u) {
-          const auto& level0 = ws.dq_users[u].levels[0];
-          ws.transport_inputs[u] = {level0.values.data(), level0.bits.data(),
-                                    ws.lookups[u].slot.data(), ws.lookups[u].changed.words.data(),
-                                    diffs[order[u]]->positions.values.data()};
-        }
-        detail::transport_positions(base.positions, changed_union, ws.transport_inputs,
-                                    ws.transport, ws.pool, kGrain,
-                                    std::span(ws.moved.data(), n_changed));
-        for (std::uint32_t u = 0; u < users; ++u)
-          ws.lookups[u].changed.clear(diffs[order[u]]->positions.indices);
-        ws.ordered.resize(users);
-        for (std::uint32_t u = 0; u < users; ++u) ws.ordered[u] = diffs[order[u]];
-        const auto t_folds = Clock::now();
-        timings_.new_folds_repaired += detail::repair_new_folds(
-            hierarchy_.topology(), base.positions, changed_union, ws.ordered,
-            std::span(ws.moved.data(), n_changed), ws.fold_repair, ws.pool, kGrain);
-        timings_.fold_repair_ms += ms_since(t_folds);
-        ws.pool.for_chunks(n_changed, kGrain, count_kept);
-      } else {
-        blend_and_reconstruct<DqOps>(links, level_count, std::span(ws.dq_users.data(), users),
-                                     ws.dq_merged, t.node_blend, ws.pool, &move_vertices);
-      }
-      timings_.blend_ms += ms_since(t0);
-      count_work(ws.dq_users, users, ws.dq_merged, level_count, sizeof(DualQuat));
-      t0 = Clock::now();
-      ws.chunk_offset[0] = 0;
-      for (std::size_t c = 0; c < chunks; ++c) ws.chunk_offset[c + 1] += ws.chunk_offset[c];
-      const std::size_t kept_total = ws.chunk_offset[chunks];
-      merged.positions.indices.resize(kept_total);
-      merged.positions.values.resize(3 * kept_total);
-      ws.pool.for_chunks(n_changed, kGrain, [&](std::size_t begin, std::size_t end) {
-        std::size_t at = ws.chunk_offset[begin / kGrain];
-        for (std::size_t i = begin; i < end; ++i) {
-          const std::uint32_t v = changed_union[i];
-          const Vec3f& p = ws.moved[i];
-          if (!(p == base.positions[v])) {
-            merged.positions.indices[at] = v;
-            float* out = merged.positions.values.data() + 3 * at;
-            out[0] = p.x;
-            out[1] = p.y;
-            out[2] = p.z;
-            ++at;
-          }
-        }
-      });
-      timings_.apply_ms += ms_since(t0);
-    } else {
-      with_translation_ops(t.blend, [&](auto ops) {
-        using Ops = decltype(ops);
-        using Value = typename Ops::Value;
-        if (ws.vec_users.size() < users) ws.vec_users.resize(users);
-        for (std::uint32_t u = 0; u < users; ++u) ws.vec_users[u].begin(hierarchy_, level_count);
-        ws.vec_merged.begin(hierarchy_, level_count);
-        for (std::uint32_t u = 0; u < users; ++u) {
-          auto& level0 = ws.vec_users[u].levels[0];
-          const AttributeDiff& pd = diffs[order[u]]->positions;
-          for (std::uint32_t i = 0; i < pd.indices.size(); ++i) {
-            const std::uint32_t v = pd.indices[i];
-            const float* e = pd.values.data() + 3 * std::size_t{i};
-            const Vec3f a = local.to_local(base.positions[v]);
-            const Vec3f b = local.to_local({e[0], e[1], e[2]});
-            level0.mark(v);
-            level0.val(v) = Value{{b.x - a.x, b.y - a.y, b.z - a.z, 0}};
-          }
-        }
-        timings_.isometry_ms += ms_since(t0);
-        t0 = Clock::now();
-        ws.pool.run(users,
-                    [&](std::size_t u) { decompose<Ops>(links, level_count, ws.vec_users[u]); });
-        timings_.decompose_ms += ms_since(t0);
-        t0 = Clock::now();
-        auto& out = ws.vec_merged;
-        mark_sorted_union(
-            out.levels[0],
-            users, [&](std::size_t u) -> const auto& { return diffs[order[u]]->positions.indices; },
-            ws.sole);
-        mark_coarse_union<Value>(std::span(ws.vec_users.data(), users), level_count, out);
-        blend_and_reconstruct<Ops>(links, level_count, std::span(ws.vec_users.data(), users), out,
-                                   t.node_blend, ws.pool);
-        timings_.blend_ms += ms_since(t0);
-        count_work(ws.vec_users, users, ws.vec_merged, level_count, sizeof(Vec4));
-        t0 = Clock::now();
-        const auto& list = out.levels[0].list;  // increasing
-        for (std::size_t i = 0; i < list.size(); ++i) {
-          const std::uint32_t v = list[i];
-          const Value& d = out.levels[0].val(v);
-          const Vec3f a = local.to_local(base.positions[v]);
-          const Vec3f p = from_local({a.x + d.v[0], a.y + d.v[1], a.z + d.v[2]});
-          if (!(p == base.positions[v])) {
-            merged.positions.indices.push_back(v);
-            merged.positions.values.insert(merged.positions.values.end(), {p.x, p.y, p.z});
-          }
-        }
-        timings_.apply_ms += ms_since(t0);
-      });
-    }
+  const auto t0 = Clock::now();
+  prepare_lookups();
+  if (t.isometry) {
+    isometry_positions(merged.positions, t0);
+  } else {
+    with_translation_ops(
+        t.blend, [&](auto ops) { translation_positions<decltype(ops)>(merged.positions, t0); });
   }
-
-  // ---- channels: translations in each channel's linear space ----
-  for (std::size_t ci = 0; ci < base.channels.size(); ++ci) {
-    const Channel& channel = base.channels[ci];
-    const std::uint32_t width = channel.desc.width;
-    ChannelDiff out_diff{channel.desc, {}};
-    auto t0 = Clock::now();
-    const TranslationBlend blend = t.blend;
-    // Where two different colours overlap the result is clamped to the channel's range.
-    const NodeBlend channel_blend = t.node_blend;
-    const std::size_t channel_levels = t.channels_per_vertex ? 1 : level_count;
-    with_translation_ops(blend, [&](auto ops) {
-      using Ops = decltype(ops);
-      using Value = typename Ops::Value;
-      if (ws.vec_users.size() < users) ws.vec_users.resize(users);
-      for (std::uint32_t u = 0; u < users; ++u) ws.vec_users[u].begin(hierarchy_, channel_levels);
-      ws.vec_merged.begin(hierarchy_, channel_levels);
-      auto& out = ws.vec_merged;
-      static const std::vector<std::uint32_t> kNone;
-      std::array<const std::vector<std::uint32_t>*, kMaxDiffs> changed_lists{};
-      std::array<const float*, kMaxDiffs> changed_values{};
-      for (std::uint32_t u = 0; u < users; ++u) {
-        auto& level0 = ws.vec_users[u].levels[0];
-        changed_lists[u] = &kNone;
-        for (const ChannelDiff& cd : diffs[order[u]]->channels) {
-          if (cd.desc.name != channel.desc.name) continue;
-          changed_lists[u] = &cd.change.indices;
-          changed_values[u] = cd.change.values.data();
-          for (std::uint32_t i = 0; i < cd.change.indices.size(); ++i) {
-            const std::uint32_t v = cd.change.indices[i];
-            Value d;
-            for (std::uint32_t k = 0; k < width; ++k) {
-              const float b =
-                  to_linear(channel.desc.linearisation, channel.values[std::size_t{v} * width + k]);
-              const float e = to_linear(channel.desc.linearisation,
-                                        cd.change.values[std::size_t{i} * width + k]);
-              d.v[k] = e - b;
-            }
-            level0.mark(v);
-            level0.val(v) = d;
-          }
-        }
-      }
-      mark_sorted_union(
-          out.levels[0], users, [&](std::size_t u) -> const auto& { return *changed_lists[u]; },
-          ws.sole);
-      ws.pool.run(users,
-                  [&](std::size_t u) { decompose<Ops>(links, channel_levels, ws.vec_users[u]); });
-      mark_coarse_union<Value>(std::span(ws.vec_users.data(), users), channel_levels, out);
-      blend_and_reconstruct<Ops>(links, channel_levels, std::span(ws.vec_users.data(), users), out,
-                                 channel_blend, ws.pool);
-      const auto& list = out.levels[0].list;  // increasing
-      for (std::size_t i = 0; i < list.size(); ++i) {
-        const std::uint32_t v = list[i];
-        const Value& d = out.levels[0].val(v);
-        bool changed = false;
-        float result[4];
-        const SoleChange sc = ws.sole[i];
-        for (std::uint32_t k = 0; k < width; ++k) {
-          const float b = channel.values[std::size_t{v} * width + k];
-          // one painter: its value, exactly (average keeps its definition: half of it)
-          if (sc.owner != kNoOwner && channel_levels == 1 && blend != TranslationBlend::average) {
-            result[k] = changed_values[sc.owner][std::size_t{sc.entry} * width + k];
-            changed |= std::memcmp(&result[k], &b, sizeof(float)) != 0;
-            continue;
-          }
-          result[k] = std::clamp(from_linear(channel.desc.linearisation,
-                                             to_linear(channel.desc.linearisation, b) + d.v[k]),
-                                 channel.desc.min_value, channel.desc.max_value);
-          changed |= std::memcmp(&result[k], &b, sizeof(float)) != 0;
-        }
-        if (changed) {
-          out_diff.change.indices.push_back(v);
-          out_diff.change.values.insert(out_diff.change.values.end(), result, result + width);
-        }
-      }
-    });
-    timings_.blend_ms += ms_since(t0);
-    merged.channels.push_back(std::move(out_diff));
-  }
+  for (const Channel& channel : base.channels) merged.channels.push_back(merge_channel(channel));
   return merged;
+}
+
+/// Per node visited: its value and its parent links (index + weight); its bit is noise.
+template <class UserPyramids, class MergedPyramid>
+void Merger::Pass::count_work(const UserPyramids& user_pyramids,
+                              const MergedPyramid& merged_pyramid, std::size_t levels,
+                              std::size_t value_bytes) {
+  const std::size_t per_node = value_bytes + hierarchy.stride() * 8;
+  auto add = [&](const auto& pyramid) {
+    for (std::size_t i = 0; i < levels; ++i) {
+      timings.nodes_visited += pyramid.levels[i].list.size();
+      timings.bytes_touched += pyramid.levels[i].list.size() * per_node;
+    }
+  };
+  for (std::uint32_t u = 0; u < users; ++u) add(user_pyramids[u]);
+  add(merged_pyramid);
+  for (const Diff* d : diffs) timings.bytes_touched += d->positions.indices.size() * 16;
+}
+
+/// Edited-position lookups per diff, sized for the base (each filled in its diff's own task).
+void Merger::Pass::prepare_lookups() {
+  for (std::uint32_t u = 0; u < users; ++u) {
+    Lookup& lk = ws.lookups[u];
+    if (lk.slot.size() < vertex_count) lk.slot.resize(vertex_count);
+    lk.changed.resize(vertex_count);
+  }
+}
+
+// ---- positions as isometries ----------------------------------------------------------
+
+void Merger::Pass::isometry_positions(AttributeDiff& out, Clock::time_point t0) {
+  isometries_and_averages(t0);
+  t0 = Clock::now();
+  const std::size_t n_changed = ws.dq_merged.levels[0].list.size();
+  const std::size_t chunks = (n_changed + kBlendGrain - 1) / kBlendGrain;
+  blend_isometries(chunks);
+  timings.blend_ms += ms_since(t0);
+  count_work(ws.dq_users, ws.dq_merged, level_count, sizeof(DualQuat));
+  t0 = Clock::now();
+  list_moved_positions(out, chunks);
+  timings.apply_ms += ms_since(t0);
+}
+
+/// One region, one task per diff (its lookup, isometries and averages: independent of the
+/// other diffs), plus one task, listed last so that the thread that finishes first takes it,
+/// for the vertices the result needs (the union of the changed ones): it writes only the
+/// merged pyramid's level 0, so no barrier between.
+void Merger::Pass::isometries_and_averages(Clock::time_point t0) {
+  if (ws.dq_users.size() < users) ws.dq_users.resize(users);
+  for (std::uint32_t u = 0; u < users; ++u) ws.dq_users[u].begin(hierarchy, level_count);
+  ws.dq_merged.begin(hierarchy, level_count);
+  double iso_task_ms[max_merge_diffs] = {};
+  ws.pool.run(users + 1, [&](std::size_t u) {
+    if (u == users) {
+      mark_union(
+          ws.dq_merged.levels[0],
+          users, [&](std::size_t j) -> const auto& { return positions_of(j).indices; });
+      return;
+    }
+    iso_task_ms[u] = diff_isometries(u);
+    decompose<DqOps>(links, level_count, ws.dq_users[u]);
+  });
+  mark_coarse_union<DualQuat>(std::span(ws.dq_users.data(), users), level_count, ws.dq_merged);
+  // The region's time split: isometries = the longest diff's isometry part, the rest
+  // (decomposition and its imbalance) to decompose.
+  const double region_ms = ms_since(t0);
+  const double iso_ms = *std::max_element(iso_task_ms, iso_task_ms + users);
+  timings.isometry_ms += std::min(iso_ms, region_ms);
+  timings.decompose_ms += std::max(0.0, region_ms - iso_ms);
+}
+
+/// Diff u's lookup and per-vertex isometries into its pyramid's level 0; returns the time
+/// it took.
+double Merger::Pass::diff_isometries(std::size_t u) {
+  const auto task_t0 = Clock::now();
+  Lookup& lk = ws.lookups[u];
+  const AttributeDiff& pd = positions_of(u);
+  for (std::uint32_t i = 0; i < pd.indices.size(); ++i) {
+    lk.slot[pd.indices[i]] = i;
+    lk.changed.insert(pd.indices[i]);
+  }
+  lk.isometry.resize(vertex_count, base.face_count());
+  auto& level0 = ws.dq_users[u].levels[0];
+  auto edited = [&lk, &pd, this](std::uint32_t v) -> Vec3f {
+    if (!lk.changed.test(v)) return base.positions[v];
+    const float* p = pd.values.data() + 3 * std::size_t{lk.slot[v]};
+    return {p[0], p[1], p[2]};
+  };
+  detail::compute_vertex_isometries(
+      hierarchy.topology(), base.positions, pd.indices, edited, lk.isometry,
+      [&level0](std::uint32_t v, const DualQuat& q) {
+        level0.values[v] = q;
+        level0.set(v);
+      },
+      lk.touched, local);
+  if (!t.transport) lk.changed.clear(pd.indices);  // the transport reads it
+  level0.list.assign(lk.touched.begin(), lk.touched.end());
+  return ms_since(task_t0);
+}
+
+/// Moved positions of the changed vertices (the union, increasing) and, per chunk, how many
+/// differ from the base: by the frame transport, or computed by the node blend as soon as
+/// each chunk of level 0 is done.
+void Merger::Pass::blend_isometries(std::size_t chunks) {
+  const std::size_t n_changed = ws.dq_merged.levels[0].list.size();
+  if (ws.moved.size() < n_changed) ws.moved.resize(n_changed);
+  if (ws.chunk_offset.size() < chunks + 1) ws.chunk_offset.resize(chunks + 1);
+  if (t.transport) {
+    transport_positions();
+    return;
+  }
+  const std::function<void(std::size_t, std::size_t)> move_vertices = [&](std::size_t begin,
+                                                                          std::size_t end) {
+    const auto& changed_union = ws.dq_merged.levels[0].list;
+    for (std::size_t i = begin; i < end; ++i) {
+      const std::uint32_t v = changed_union[i];
+      ws.moved[i] =
+          from_local(ws.dq_merged.levels[0].val(v).apply(local.to_local(base.positions[v])));
+    }
+    count_kept(begin, end);
+  };
+  blend_and_reconstruct<DqOps>(links, level_count, std::span(ws.dq_users.data(), users),
+                               ws.dq_merged, t.node_blend, ws.pool, &move_vertices);
+}
+
+/// `full`: each diff's displacements carried in the frames the others give the surface.
+void Merger::Pass::transport_positions() {
+  const auto& changed_union = ws.dq_merged.levels[0].list;
+  const std::size_t n_changed = changed_union.size();
+  ws.transport_inputs.resize(users);
+  for (std::uint32_t u = 0; u < users; ++u) {
+    const auto& level0 = ws.dq_users[u].levels[0];
+    ws.transport_inputs[u] = {level0.values.data(), level0.bits.data(), ws.lookups[u].slot.data(),
+                              ws.lookups[u].changed.words.data(), positions_of(u).values.data()};
+  }
+  detail::transport_positions(base.positions, changed_union, ws.transport_inputs, ws.transport,
+                              ws.pool, kBlendGrain, std::span(ws.moved.data(), n_changed));
+  for (std::uint32_t u = 0; u < users; ++u) ws.lookups[u].changed.clear(positions_of(u).indices);
+  repair_folds(changed_union, std::span(ws.moved.data(), n_changed));
+  ws.pool.for_chunks(n_changed, kBlendGrain,
+                     [&](std::size_t begin, std::size_t end) { count_kept(begin, end); });
+}
+
+void Merger::Pass::repair_folds(std::span<const std::uint32_t> changed, std::span<Vec3f> moved) {
+  const auto t0 = Clock::now();
+  ws.ordered.resize(users);
+  for (std::uint32_t u = 0; u < users; ++u) ws.ordered[u] = diffs[order[u]];
+  timings.new_folds_repaired +=
+      detail::repair_new_folds(hierarchy.topology(), base.positions, changed, ws.ordered, moved,
+                               ws.fold_repair, ws.pool, kBlendGrain);
+  timings.fold_repair_ms += ms_since(t0);
+}
+
+/// How many of the chunk's moved positions differ from the base (at its slot + 1, for the
+/// prefix sum).
+void Merger::Pass::count_kept(std::size_t begin, std::size_t end) {
+  const auto& changed_union = ws.dq_merged.levels[0].list;
+  std::size_t kept = 0;
+  for (std::size_t i = begin; i < end; ++i)
+    kept += !(ws.moved[i] == base.positions[changed_union[i]]);
+  ws.chunk_offset[begin / kBlendGrain + 1] = kept;
+}
+
+/// Each chunk lists its moved positions that differ from the base at its offset (the prefix
+/// sum of the counts): the same order as one serial pass, every write disjoint.
+void Merger::Pass::list_moved_positions(AttributeDiff& out, std::size_t chunks) {
+  const auto& changed_union = ws.dq_merged.levels[0].list;
+  ws.chunk_offset[0] = 0;
+  for (std::size_t c = 0; c < chunks; ++c) ws.chunk_offset[c + 1] += ws.chunk_offset[c];
+  const std::size_t kept_total = ws.chunk_offset[chunks];
+  out.indices.resize(kept_total);
+  out.values.resize(3 * kept_total);
+  ws.pool.for_chunks(changed_union.size(), kBlendGrain, [&](std::size_t begin, std::size_t end) {
+    std::size_t at = ws.chunk_offset[begin / kBlendGrain];
+    for (std::size_t i = begin; i < end; ++i) {
+      const std::uint32_t v = changed_union[i];
+      const Vec3f& p = ws.moved[i];
+      if (!(p == base.positions[v])) {
+        out.indices[at] = v;
+        float* o = out.values.data() + 3 * at;
+        o[0] = p.x;
+        o[1] = p.y;
+        o[2] = p.z;
+        ++at;
+      }
+    }
+  });
+}
+
+// ---- positions as translations --------------------------------------------------------
+
+template <class Ops>
+void Merger::Pass::translation_positions(AttributeDiff& out, Clock::time_point t0) {
+  using Value = typename Ops::Value;
+  if (ws.vec_users.size() < users) ws.vec_users.resize(users);
+  for (std::uint32_t u = 0; u < users; ++u) ws.vec_users[u].begin(hierarchy, level_count);
+  ws.vec_merged.begin(hierarchy, level_count);
+  for (std::uint32_t u = 0; u < users; ++u) {
+    auto& level0 = ws.vec_users[u].levels[0];
+    const AttributeDiff& pd = positions_of(u);
+    for (std::uint32_t i = 0; i < pd.indices.size(); ++i) {
+      const std::uint32_t v = pd.indices[i];
+      const float* e = pd.values.data() + 3 * std::size_t{i};
+      const Vec3f a = local.to_local(base.positions[v]);
+      const Vec3f b = local.to_local({e[0], e[1], e[2]});
+      level0.mark(v);
+      level0.val(v) = Value{{b.x - a.x, b.y - a.y, b.z - a.z, 0}};
+    }
+  }
+  timings.isometry_ms += ms_since(t0);
+  t0 = Clock::now();
+  ws.pool.run(users, [&](std::size_t u) { decompose<Ops>(links, level_count, ws.vec_users[u]); });
+  timings.decompose_ms += ms_since(t0);
+  t0 = Clock::now();
+  auto& merged = ws.vec_merged;
+  mark_sorted_union(
+      merged.levels[0],
+      users, [&](std::size_t u) -> const auto& { return positions_of(u).indices; }, ws.sole);
+  mark_coarse_union<Value>(std::span(ws.vec_users.data(), users), level_count, merged);
+  blend_and_reconstruct<Ops>(links, level_count, std::span(ws.vec_users.data(), users), merged,
+                             t.node_blend, ws.pool);
+  timings.blend_ms += ms_since(t0);
+  count_work(ws.vec_users, ws.vec_merged, level_count, sizeof(Vec4));
+  t0 = Clock::now();
+  list_translated_positions<Ops>(out);
+  timings.apply_ms += ms_since(t0);
+}
+
+/// The merged translations applied to the base, listed where they change it.
+template <class Ops>
+void Merger::Pass::list_translated_positions(AttributeDiff& out) const {
+  const auto& level0 = ws.vec_merged.levels[0];
+  const auto& list = level0.list;  // increasing
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const std::uint32_t v = list[i];
+    const typename Ops::Value& d = level0.val(v);
+    const Vec3f a = local.to_local(base.positions[v]);
+    const Vec3f p = from_local({a.x + d.v[0], a.y + d.v[1], a.z + d.v[2]});
+    if (!(p == base.positions[v])) {
+      out.indices.push_back(v);
+      out.values.insert(out.values.end(), {p.x, p.y, p.z});
+    }
+  }
+}
+
+// ---- channels: translations in each channel's linear space ----------------------------
+
+ChannelDiff Merger::Pass::merge_channel(const Channel& channel) {
+  ChannelDiff out_diff{channel.desc, {}};
+  const auto t0 = Clock::now();
+  const std::size_t channel_levels = t.channels_per_vertex ? 1 : level_count;
+  with_translation_ops(t.blend, [&](auto ops) {
+    using Ops = decltype(ops);
+    using Value = typename Ops::Value;
+    std::array<const std::vector<std::uint32_t>*, max_merge_diffs> changed_lists{};
+    std::array<const float*, max_merge_diffs> changed_values{};
+    channel_translations<Ops>(channel, channel_levels, changed_lists, changed_values);
+    auto& merged = ws.vec_merged;
+    mark_sorted_union(
+        merged.levels[0], users, [&](std::size_t u) -> const auto& { return *changed_lists[u]; },
+        ws.sole);
+    ws.pool.run(users,
+                [&](std::size_t u) { decompose<Ops>(links, channel_levels, ws.vec_users[u]); });
+    mark_coarse_union<Value>(std::span(ws.vec_users.data(), users), channel_levels, merged);
+    // Where two different colours overlap the result is clamped to the channel's range.
+    blend_and_reconstruct<Ops>(links, channel_levels, std::span(ws.vec_users.data(), users), merged,
+                               t.node_blend, ws.pool);
+    list_channel_result<Ops>(channel, channel_levels, changed_values, out_diff);
+  });
+  timings.blend_ms += ms_since(t0);
+  return out_diff;
+}
+
+/// Each diff's changes of `channel` as translations in its linear space, on its pyramid's
+/// level 0; `changed_lists` / `changed_values` get each diff's changed vertices and values
+/// (an empty list where it does not change the channel).
+template <class Ops>
+void Merger::Pass::channel_translations(const Channel& channel, std::size_t channel_levels,
+                                        std::span<const std::vector<std::uint32_t>*> changed_lists,
+                                        std::span<const float*> changed_values) {
+  using Value = typename Ops::Value;
+  const std::uint32_t width = channel.desc.width;
+  if (ws.vec_users.size() < users) ws.vec_users.resize(users);
+  for (std::uint32_t u = 0; u < users; ++u) ws.vec_users[u].begin(hierarchy, channel_levels);
+  ws.vec_merged.begin(hierarchy, channel_levels);
+  for (std::uint32_t u = 0; u < users; ++u) {
+    auto& level0 = ws.vec_users[u].levels[0];
+    changed_lists[u] = &kNoChanges;
+    for (const ChannelDiff& cd : diffs[order[u]]->channels) {
+      if (cd.desc.name != channel.desc.name) continue;
+      changed_lists[u] = &cd.change.indices;
+      changed_values[u] = cd.change.values.data();
+      for (std::uint32_t i = 0; i < cd.change.indices.size(); ++i) {
+        const std::uint32_t v = cd.change.indices[i];
+        Value d;
+        for (std::uint32_t k = 0; k < width; ++k) {
+          const float b =
+              to_linear(channel.desc.linearisation, channel.values[std::size_t{v} * width + k]);
+          const float e =
+              to_linear(channel.desc.linearisation, cd.change.values[std::size_t{i} * width + k]);
+          d.v[k] = e - b;
+        }
+        level0.mark(v);
+        level0.val(v) = d;
+      }
+    }
+  }
+}
+
+/// The merged channel values, listed where they change the base: one painter's value exactly
+/// where it alone changed a vertex (per vertex; average keeps its definition: half of it),
+/// else the base plus the merged translation, clamped to the channel's range.
+template <class Ops>
+void Merger::Pass::list_channel_result(const Channel& channel, std::size_t channel_levels,
+                                       std::span<const float* const> changed_values,
+                                       ChannelDiff& out_diff) const {
+  const std::uint32_t width = channel.desc.width;
+  const auto& level0 = ws.vec_merged.levels[0];
+  const auto& list = level0.list;  // increasing
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const std::uint32_t v = list[i];
+    const typename Ops::Value& d = level0.val(v);
+    bool changed = false;
+    float result[4];
+    const SoleChange sc = ws.sole[i];
+    for (std::uint32_t k = 0; k < width; ++k) {
+      const float b = channel.values[std::size_t{v} * width + k];
+      if (sc.owner != kNoOwner && channel_levels == 1 && t.blend != TranslationBlend::average) {
+        result[k] = changed_values[sc.owner][std::size_t{sc.entry} * width + k];
+        changed |= std::memcmp(&result[k], &b, sizeof(float)) != 0;
+        continue;
+      }
+      result[k] = std::clamp(from_linear(channel.desc.linearisation,
+                                         to_linear(channel.desc.linearisation, b) + d.v[k]),
+                             channel.desc.min_value, channel.desc.max_value);
+      changed |= std::memcmp(&result[k], &b, sizeof(float)) != 0;
+    }
+    if (changed) {
+      out_diff.change.indices.push_back(v);
+      out_diff.change.values.insert(out_diff.change.values.end(), result, result + width);
+    }
+  }
 }
 
 MergeFrame MergeFrame::fit(std::span<const Vec3f> positions) {

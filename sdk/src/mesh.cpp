@@ -119,6 +119,14 @@ std::vector<ChannelDesc> material_channels() {
           default_channel("roughness", 1)};
 }
 
+std::vector<float> default_material_fill(const ChannelDesc& desc) {
+  const float value = desc.name == "albedo"      ? default_albedo
+                      : desc.name == "metallic"  ? default_metallic
+                      : desc.name == "roughness" ? default_roughness
+                                                 : 0.f;
+  return std::vector<float>(desc.width, value);
+}
+
 int Mesh::find_channel(std::string_view name) const {
   for (std::size_t i = 0; i < channels.size(); ++i) {
     if (channels[i].desc.name == name) return static_cast<int>(i);

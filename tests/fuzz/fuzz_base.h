@@ -6,8 +6,8 @@
 #include <limits>
 #include <vector>
 
-#include "csculpt/generate.h"
 #include "csculpt/mesh.h"
+#include "csculpt/testkit/generate.h"
 
 namespace csculpt::fuzz {
 

@@ -8,8 +8,8 @@
 
 #include "csculpt/diff.h"
 #include "csculpt/error.h"
-#include "csculpt/generate.h"
 #include "csculpt/peer/session.h"
+#include "csculpt/testkit/generate.h"
 
 namespace {
 

@@ -1,7 +1,7 @@
 #!/bin/sh
 # The AVX2 kernels' object must define nothing the baseline code could end up calling: the
 # linker keeps one copy of each inline function, and an AVX2-compiled copy of a shared one
-# would crash CPUs without AVX2. sdk/src/simd_isa.h gives every SIMD helper an
+# would crash CPUs without AVX2. sdk/src/simd/simd_isa.h gives every SIMD helper an
 # instruction-set namespace; this checks that the object's global symbols are only its
 # entry points (csculpt::detail::*_avx2()) and names inside isa_avx2.
 #   isolation.sh LIBCSCULPT_SDK_A

@@ -23,12 +23,12 @@
 #include <vector>
 
 #include "csculpt/diff.h"
-#include "csculpt/generate.h"
 #include "csculpt/hierarchy.h"
 #include "csculpt/io.h"
 #include "csculpt/merge.h"
 #include "csculpt/mesh.h"
-#include "csculpt/scenarios.h"
+#include "csculpt/testkit/generate.h"
+#include "csculpt/testkit/scenarios.h"
 #include "mini_json.h"
 #include "test_meshes.h"
 
@@ -462,13 +462,13 @@ TEST_F(Cli, MergeExplainDiagnosesABlenderCase) {
   const fs::path c = fs::path(CSCULPT_EVAL_CASES) / "disjoint_sphere";
   if (!fs::exists(c / "ideal.ply")) GTEST_SKIP() << "no Blender cases at " << CSCULPT_EVAL_CASES;
   const std::string out = (dir_ / "out" / "merged.ply").string();
-  const Result r = run(
-      "merge " + quote((c / "base.ply").string()) + " " + quote((c / "a.ply").string()) + " " +
-      quote((c / "b.ply").string()) + " -o " + quote(out) +
-      // the hierarchy merge's leak between disjoint edits is what there is to diagnose here
-      // (full is exact on this case: no error to locate)
-      " --method hierarchy-blend --explain --ideal " + quote((c / "ideal.ply").string()) +
-      " --ideal " + quote((c / "ideal_frame.ply").string()));
+  const Result r =
+      run("merge " + quote((c / "base.ply").string()) + " " + quote((c / "a.ply").string()) + " " +
+          quote((c / "b.ply").string()) + " -o " + quote(out) +
+          // the hierarchy merge's leak between disjoint edits is what there is to diagnose here
+          // (full is exact on this case: no error to locate)
+          " --method hierarchy-blend --explain --ideal " + quote((c / "ideal.ply").string()) +
+          " --ideal " + quote((c / "ideal_frame.ply").string()));
   expect_one_json_line(r, "merge --explain");
   ASSERT_TRUE(fs::exists(out));
   test::Json j;

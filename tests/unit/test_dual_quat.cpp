@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "csculpt/dual_quat.h"
-#include "csculpt/random.h"
+#include "csculpt/testkit/random.h"
 #include "test_support.h"
 
 namespace csculpt {

@@ -10,9 +10,9 @@
 #include "csculpt/diff.h"
 #include "csculpt/error.h"
 #include "csculpt/folds.h"
-#include "csculpt/generate.h"
 #include "csculpt/hierarchy.h"
 #include "csculpt/mesh.h"
+#include "csculpt/testkit/generate.h"
 
 namespace csculpt {
 namespace {

@@ -12,10 +12,10 @@
 #include <vector>
 
 #include "csculpt/error.h"
-#include "csculpt/generate.h"
 #include "csculpt/hierarchy.h"
 #include "csculpt/io.h"
 #include "csculpt/mesh.h"
+#include "csculpt/testkit/generate.h"
 #include "test_meshes.h"
 
 namespace csculpt {

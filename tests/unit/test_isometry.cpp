@@ -11,11 +11,11 @@
 #include <vector>
 
 #include "csculpt/dual_quat.h"
-#include "csculpt/generate.h"
 #include "csculpt/hierarchy.h"
 #include "csculpt/isometry.h"
 #include "csculpt/mesh.h"
-#include "csculpt/random.h"
+#include "csculpt/testkit/generate.h"
+#include "csculpt/testkit/random.h"
 #include "test_support.h"
 
 namespace csculpt {

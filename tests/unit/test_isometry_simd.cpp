@@ -10,8 +10,8 @@
 #include <cstring>
 #include <numbers>
 
-#include "csculpt/random.h"
-#include "vertex_isometry_kernel.h"
+#include "csculpt/testkit/random.h"
+#include "simd/vertex_isometry_kernel.h"
 
 namespace csculpt {
 namespace {

@@ -11,9 +11,9 @@
 #include <vector>
 
 #include "csculpt/diff.h"
-#include "csculpt/generate.h"
 #include "csculpt/hierarchy.h"
 #include "csculpt/merge.h"
+#include "csculpt/testkit/generate.h"
 #include "csculpt/vec3.h"
 
 namespace csculpt {

@@ -13,14 +13,14 @@
 #include <string>
 #include <vector>
 
-#include "blend_kernel.h"
 #include "csculpt/diff.h"
-#include "csculpt/generate.h"
 #include "csculpt/hierarchy.h"
 #include "csculpt/io.h"
 #include "csculpt/merge.h"
-#include "csculpt/random.h"
-#include "face_rotation_lanes.h"
+#include "csculpt/testkit/generate.h"
+#include "csculpt/testkit/random.h"
+#include "simd/blend_kernel.h"
+#include "simd/face_rotation_lanes.h"
 
 namespace csculpt {
 namespace {

@@ -24,11 +24,11 @@
 
 #include "csculpt/diff.h"
 #include "csculpt/error.h"
-#include "csculpt/generate.h"
 #include "csculpt/hierarchy.h"
 #include "csculpt/io.h"
 #include "csculpt/mesh.h"
-#include "csculpt/random.h"
+#include "csculpt/testkit/generate.h"
+#include "csculpt/testkit/random.h"
 #include "csculpt/vec3.h"
 #include "csculpt/wire.h"
 #include "diff_generated.h"

@@ -4,6 +4,7 @@
 // every other channel merges the same way as translations in its linear space.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -34,6 +35,9 @@ enum class MergeMethod : std::uint32_t {
   /// node by magnitude and counted once per intent, recomposed coarse to fine
   hierarchy_blend = 8,
 };
+
+/// The most diffs one merge takes (the C ABI's CSC_MAX_MERGE_DIFFS).
+inline constexpr std::size_t max_merge_diffs = 64;
 
 std::string_view to_string(MergeMethod method);
 /// "full", "single-parent", ...; throws InvalidInput listing the valid names otherwise.
@@ -81,8 +85,8 @@ class Merger {
 
   /// Merges `diffs` (each from `base`) into one diff from `base`. Vertices that no diff
   /// touches keep their exact base values; the merged diff lists only changed values.
-  /// Throws InvalidInput if a diff does not fit the base, for more than 64 diffs, or if the
-  /// base's triangles are not the hierarchy's (a sampled check: count, ends, 1024 samples).
+  /// Throws InvalidInput if a diff does not fit the base, for more than max_merge_diffs diffs, or
+  /// if the base's triangles are not the hierarchy's (a sampled check: count, ends, 1024 samples).
   /// The work runs on a pool of the machine's hardware threads owned by this Merger.
   Diff merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod method,
              const MergeFrame& frame);
@@ -99,6 +103,7 @@ class Merger {
 
  private:
   struct Workspace;
+  struct Pass;  ///< one merge's steps (merge.cpp)
   const Hierarchy& hierarchy_;
   std::unique_ptr<Workspace> workspace_;
   MergeTimings timings_;

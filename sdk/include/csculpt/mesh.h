@@ -68,6 +68,15 @@ struct Channel {
 /// roughness (squared).
 std::vector<ChannelDesc> material_channels();
 
+/// The built-in material channels' default: a grey rough dielectric (what the C ABI's
+/// csc_mesh_add_material_channels and the built-in meshes fill them with).
+inline constexpr float default_albedo = 0.5f;  ///< each of R, G and B, sRGB-encoded
+inline constexpr float default_metallic = 0.f;
+inline constexpr float default_roughness = 0.7f;
+/// `desc.width` values of the default above for the material channel `desc` (albedo, metallic,
+/// roughness, by name); 0 for any other channel.
+std::vector<float> default_material_fill(const ChannelDesc& desc);
+
 struct Mesh {
   std::vector<Vec3f> positions;
   std::vector<Triangle> triangles;

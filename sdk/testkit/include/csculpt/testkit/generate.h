@@ -14,7 +14,8 @@ namespace csculpt {
 
 /// A unit sphere: an icosahedron whose edges are split into k segments (20 k^2 triangles,
 /// 10 k^2 + 2 shared vertices), k chosen so the face count is closest to `target_faces`.
-/// With `materials`, adds the built-in material channels (grey albedo, rough dielectric).
+/// With `materials`, adds the built-in material channels filled with default_material_fill()
+/// (a grey rough dielectric, csculpt/mesh.h).
 Mesh make_sphere(std::uint32_t target_faces, bool materials = false);
 
 /// Area-weighted vertex normals (unit; zero for a vertex on no non-degenerate face).

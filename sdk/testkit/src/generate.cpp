@@ -1,11 +1,11 @@
-#include "csculpt/generate.h"
+#include "csculpt/testkit/generate.h"
 
 #include <algorithm>
 #include <cmath>
 #include <map>
 
 #include "csculpt/dual_quat.h"
-#include "csculpt/random.h"
+#include "csculpt/testkit/random.h"
 #include "csculpt/vec3.h"
 
 namespace csculpt {
@@ -110,11 +110,7 @@ Mesh make_sphere(std::uint32_t target_faces, bool materials) {
   }
   for (Vec3f& p : mesh.positions) p = unit(p);
   if (materials) {
-    for (const ChannelDesc& d : material_channels()) {
-      std::vector<float> fill(d.width, 0.5f);
-      if (d.name == "metallic") fill.assign(1, 0.f);
-      mesh.add_channel(d, fill);
-    }
+    for (const ChannelDesc& d : material_channels()) mesh.add_channel(d, default_material_fill(d));
   }
   return mesh;
 }
@@ -192,11 +188,8 @@ void apply_stroke(Mesh& mesh, const Stroke& s, const Topology* topology) {
       break;
     }
     case Stroke::Kind::paint: {
-      for (const ChannelDesc& d : material_channels()) {
-        std::vector<float> fill(d.width, 0.5f);
-        if (d.name == "metallic") fill.assign(1, 0.f);
-        mesh.add_channel(d, fill);
-      }
+      for (const ChannelDesc& d : material_channels())
+        mesh.add_channel(d, default_material_fill(d));
       Channel& albedo = mesh.channels[static_cast<std::size_t>(mesh.find_channel("albedo"))];
       Channel& rough = mesh.channels[static_cast<std::size_t>(mesh.find_channel("roughness"))];
       Channel& metal = mesh.channels[static_cast<std::size_t>(mesh.find_channel("metallic"))];

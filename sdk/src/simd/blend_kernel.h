@@ -10,11 +10,13 @@
 #include <cstdint>
 
 #include "csculpt/dual_quat.h"
+#include "csculpt/merge.h"
 
 namespace csculpt::detail {
 
-/// Largest number of diffs merged at once (the per-node scratch lives on the stack).
-constexpr std::size_t kMaxDiffs = 64;
+/// Largest number of diffs merged at once (the per-node scratch lives on the stack): the
+/// SDK's public limit.
+constexpr std::size_t kMaxDiffs = max_merge_diffs;
 
 /// One level of the blend as plain arrays: the interface between merge.cpp and each
 /// instruction set's kernel (an aggregate with no functions, so nothing of it is compiled

@@ -1,11 +1,11 @@
-#include "csculpt/scenarios.h"
+#include "csculpt/testkit/scenarios.h"
 
 #include <algorithm>
 #include <cmath>
 
 #include "csculpt/diff.h"
-#include "csculpt/generate.h"
 #include "csculpt/hierarchy.h"
+#include "csculpt/testkit/generate.h"
 
 namespace csculpt {
 namespace {

@@ -1,0 +1,252 @@
+// The C ABI of sessions (csc_session): create, join, submit, update, poll, statistics.
+#include <cmath>
+#include <cstring>
+#include <exception>
+#include <new>
+#include <string>
+
+#include "capi_internal.h"
+#include "csculpt/wire.h"
+
+using namespace csculpt::capi;
+using csculpt::InvalidInput;
+
+namespace {
+
+csculpt::peer::SessionOptions session_options(const csc_session_options* in) {
+  const csc_session_options defaults = CSC_SESSION_OPTIONS_INIT;
+  const csc_session_options o = in ? read_in(in, defaults, "options") : defaults;
+  csculpt::peer::SessionOptions so;
+  if (o.bind) so.bind = o.bind;
+  if (o.name) {
+    if (strnlen(o.name, csculpt::max_author_bytes + 1) > csculpt::max_author_bytes)
+      bad_argument("options->name is longer than 256 bytes");
+    so.name = o.name;
+  }
+  so.id = o.id;
+  if (o.sync_ms < 1 || o.heartbeat_ms < 1 || o.evasive_ms <= o.heartbeat_ms ||
+      o.expired_ms <= o.evasive_ms)
+    bad_argument("options: need sync_ms >= 1 and heartbeat_ms < evasive_ms < expired_ms");
+  so.sync = csculpt::peer::Millis{o.sync_ms};
+  so.membership = {csculpt::peer::Millis{o.heartbeat_ms}, csculpt::peer::Millis{o.evasive_ms},
+                   csculpt::peer::Millis{o.expired_ms}};
+  if (!(o.position_tolerance >= 0) || !(o.channel_tolerance >= 0) ||
+      !std::isfinite(o.position_tolerance) || !std::isfinite(o.channel_tolerance))
+    bad_argument("options: tolerances must be finite and >= 0");
+  so.wire.position_tolerance = o.position_tolerance;
+  so.wire.channel_tolerance = o.channel_tolerance;
+  return so;
+}
+
+/// Runs `open` (a session's create or join). What the transport throws (anything but the SDK's
+/// own errors and bad_alloc) is an input/output failure, reported after `what`: the C ABI
+/// names no transport type, so the peer layer can translate its errors itself.
+template <class Open>
+std::unique_ptr<csculpt::peer::Session> open_session(const std::string& what, Open&& open) {
+  try {
+    return open();
+  } catch (const csculpt::InvalidInput&) {
+    throw;
+  } catch (const csculpt::IoError&) {
+    throw;
+  } catch (const std::bad_alloc&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw csculpt::IoError(what + e.what());
+  }
+}
+
+std::unique_ptr<csc_session> new_session(std::unique_ptr<csculpt::peer::Session> s) {
+  auto h = std::make_unique<csc_session>();
+  h->local = s->base();
+  h->invite = s->invite();
+  h->session = std::move(s);
+  return h;
+}
+
+csc_session& live_session(csc_session* s) {
+  csc_session& h = handle(s, Tag::session, "session");
+  if (h.left) bad_argument("the session was left");
+  return h;
+}
+
+/// Host arrays -> the mirror (channels given as NULL keep the mirror's values).
+void copy_in(const csc_vertex_arrays& a, csculpt::Mesh& m) {
+  std::memcpy(static_cast<void*>(m.positions.data()), a.positions, m.positions.size() * 12);
+  for (std::size_t c = 0; c < m.channels.size(); ++c)
+    if (a.channels[c] != nullptr)
+      std::memcpy(m.channels[c].values.data(), a.channels[c],
+                  m.channels[c].values.size() * sizeof(float));
+}
+
+void copy_out(const csculpt::Mesh& m, const csc_vertex_arrays& a) {
+  std::memcpy(a.positions, m.positions.data(), m.positions.size() * 12);
+  for (std::size_t c = 0; c < m.channels.size(); ++c)
+    if (a.channels[c] != nullptr)
+      std::memcpy(a.channels[c], m.channels[c].values.data(),
+                  m.channels[c].values.size() * sizeof(float));
+}
+
+}  // namespace
+
+extern "C" {
+
+CSC_API csc_status csc_session_create(csc_session** out, const csc_mesh* mesh,
+                                      const csc_session_options* options) {
+  return guarded("csc_session_create", [&] {
+    require_pointer(out, "out");
+    const csculpt::Mesh& m = handle(mesh, Tag::mesh, "mesh").mesh;
+    const csculpt::peer::SessionOptions so = session_options(options);
+    *out = new_session(open_session(std::string("cannot listen on '") + so.bind + "': ", [&] {
+             return csculpt::peer::Session::create(m, so);
+           })).release();
+  });
+}
+
+CSC_API csc_status csc_session_join(csc_session** out, const char* invite,
+                                    const csc_session_options* options) {
+  return guarded("csc_session_join", [&] {
+    require_pointer(out, "out");
+    require_pointer(invite, "invite");
+    const csc_session_options defaults = CSC_SESSION_OPTIONS_INIT;
+    const csc_session_options o = options ? read_in(options, defaults, "options") : defaults;
+    const csculpt::peer::SessionOptions so = session_options(options);
+    *out =
+        new_session(open_session("cannot join: ", [&] {
+          return csculpt::peer::Session::join(invite, so, csculpt::peer::Millis{o.join_timeout_ms});
+        })).release();
+  });
+}
+
+CSC_API csc_status csc_session_leave(csc_session* session) {
+  return guarded("csc_session_leave", [&] {
+    csc_session& h = live_session(session);
+    h.session->leave();
+    h.left = true;
+  });
+}
+
+CSC_API void csc_session_destroy(csc_session* session) {
+  if (!is(session, Tag::session)) return;
+  try {
+    session->session->leave();
+  } catch (...) {
+  }
+  destroy(session, Tag::session);
+}
+
+CSC_API const char* csc_session_invite(const csc_session* session) {
+  return is(session, Tag::session) ? session->invite.c_str() : nullptr;
+}
+CSC_API uint64_t csc_session_id(const csc_session* session) {
+  return is(session, Tag::session) ? session->session->id() : 0;
+}
+CSC_API uint64_t csc_session_version(const csc_session* session) {
+  return is(session, Tag::session) ? session->session->version() : 0;
+}
+
+CSC_API csc_status csc_session_copy_base(csc_mesh** out, const csc_session* session) {
+  return guarded("csc_session_copy_base", [&] {
+    require_pointer(out, "out");
+    const csc_session& h = handle(session, Tag::session, "session");
+    auto m = std::make_unique<csc_mesh>();
+    m->mesh = h.session->base();
+    *out = m.release();
+  });
+}
+
+CSC_API csc_status csc_session_submit(csc_session* session, const csc_vertex_arrays* local,
+                                      uint32_t strokes, int32_t* sent) {
+  return guarded("csc_session_submit", [&] {
+    csc_session& h = live_session(session);
+    const csc_vertex_arrays a = host_arrays(local, h.local, "local");
+    copy_in(a, h.local);
+    // Bad host values (NaN/Inf) are refused before anything is sent or written back.
+    const bool did = h.session->submit(h.local, strokes);
+    copy_out(h.local, a);
+    if (sent) *sent = did ? 1 : 0;
+  });
+}
+
+CSC_API csc_status csc_session_update(csc_session* session, const csc_vertex_arrays* local,
+                                      uint32_t* applied) {
+  return guarded("csc_session_update", [&] {
+    csc_session& h = live_session(session);
+    const csc_vertex_arrays a = host_arrays(local, h.local, "local");
+    copy_in(a, h.local);
+    const std::size_t n = h.session->update(h.local);
+    copy_out(h.local, a);
+    if (applied) *applied = static_cast<uint32_t>(n);
+  });
+}
+
+CSC_API csc_status csc_session_poll(csc_session* session, csc_session_event* event,
+                                    int32_t* has_event) {
+  return guarded("csc_session_poll", [&] {
+    csc_session& h = handle(session, Tag::session, "session");
+    require_pointer(event, "event");
+    require_pointer(has_event, "has_event");
+    require_struct_size(event->struct_size, first_published_size<csc_session_event>, "event");
+    std::vector<csculpt::peer::Event>& queue = h.pending_events;
+    if (queue.empty()) queue = h.session->poll_events();
+    if (queue.empty()) {
+      *has_event = 0;
+      return;
+    }
+    const csculpt::peer::Event e = std::move(queue.front());
+    queue.erase(queue.begin());
+    h.event_message = e.message;
+    csc_session_event v = CSC_SESSION_EVENT_INIT;
+    v.kind = static_cast<csc_event_kind>(static_cast<std::uint32_t>(e.kind));
+    v.peer = e.peer;
+    v.version = e.version;
+    v.epoch = e.epoch;
+    v.message = h.event_message.c_str();
+    write_out(event, v, "event");
+    *has_event = 1;
+  });
+}
+
+CSC_API csc_status csc_session_get_stats(const csc_session* session, csc_session_stats* out) {
+  return guarded("csc_session_get_stats", [&] {
+    const csculpt::peer::SessionStats s = handle(session, Tag::session, "session").session->stats();
+    csc_session_stats v = CSC_SESSION_STATS_INIT;
+    v.id = s.id;
+    v.version = s.version;
+    v.epoch = s.epoch;
+    v.merger = s.merger;
+    v.members = s.members;
+    v.submits = s.submits;
+    v.submit_bytes = s.submit_bytes;
+    v.strokes_submitted = s.strokes_submitted;
+    v.strokes_acknowledged = s.strokes_acknowledged;
+    v.versions_applied = s.versions_applied;
+    v.rebases = s.rebases;
+    v.merges = s.merges;
+    v.merged_strokes = s.merged_strokes;
+    v.conflicting_strokes = s.conflicting_strokes;
+    v.merge_ms_mean = s.merges ? s.merge_ms_sum / double(s.merges) : 0.0;
+    v.merge_ms_max = s.merge_ms_max;
+    v.messages_received = s.messages_received;
+    v.messages_dropped = s.messages_dropped;
+    v.stale_ignored = s.stale_ignored;
+    v.auth_rejected = s.auth_rejected;
+    write_out(out, v, "out");
+  });
+}
+
+CSC_API csc_status csc_session_attribution_colors(const csc_session* session, float* rgb,
+                                                  uint32_t vertex_count) {
+  return guarded("csc_session_attribution_colors", [&] {
+    const csc_session& h = handle(session, Tag::session, "session");
+    require_pointer(rgb, "rgb");
+    if (vertex_count != h.local.vertex_count())
+      bad_argument("vertex_count is " + std::to_string(vertex_count) + ", the mesh has " +
+                   std::to_string(h.local.vertex_count()));
+    const std::vector<float> colours =
+        csculpt::peer::attribution_colours(h.session->attribution(), vertex_count);
+    std::memcpy(rgb, colours.data(), colours.size() * sizeof(float));
+  });
+}
+
+}  // extern "C"
