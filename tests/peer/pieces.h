@@ -2,9 +2,11 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 
 #include "csculpt/diff.h"
 #include "csculpt/generate.h"
+#include "csculpt/hierarchy.h"
 #include "csculpt/mesh.h"
 
 namespace csculpt::peer::testing {
@@ -16,6 +18,13 @@ inline const Mesh& sphere() {
 }
 
 /// `base` with a grab stroke at `center` (and, with `paint`, a paint stroke there).
+/// The hierarchy of sphere() (built once).
+inline std::shared_ptr<const Hierarchy> sphere_hierarchy() {
+  static const auto h = std::make_shared<const Hierarchy>(
+      Hierarchy::build(static_cast<std::uint32_t>(sphere().vertex_count()), sphere().triangles));
+  return h;
+}
+
 inline Mesh stroked(const Mesh& base, Vec3f center, Vec3f axis, bool paint = false) {
   Mesh m = base;
   Stroke s;

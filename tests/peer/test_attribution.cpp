@@ -10,8 +10,7 @@ namespace {
 
 using namespace csculpt;
 using namespace csculpt::peer;
-using csculpt::peer::testing::sphere;
-using csculpt::peer::testing::stroke_diff;
+using namespace csculpt::peer::testing;
 
 TEST(Attribution, TouchedIsTheUnionOfPositionsAndChannels) {
   Diff d;

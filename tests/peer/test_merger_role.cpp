@@ -11,15 +11,12 @@ namespace {
 
 using namespace csculpt;
 using namespace csculpt::peer;
-using csculpt::peer::testing::sphere;
-using csculpt::peer::testing::stroke_diff;
+using namespace csculpt::peer::testing;
 
 struct Fixture {
   Mesh base = sphere();
-  std::shared_ptr<const Hierarchy> hierarchy = std::make_shared<const Hierarchy>(
-      Hierarchy::build(static_cast<std::uint32_t>(base.vertex_count()), base.triangles));
   MergeFrame frame = MergeFrame::fit(base.positions);
-  MergerRole role{hierarchy};
+  MergerRole role{sphere_hierarchy()};
 
   Bytes submit(const Diff& d, std::uint64_t version, std::uint64_t sequence) const {
     DiffHeader h;

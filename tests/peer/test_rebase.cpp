@@ -13,14 +13,11 @@ namespace {
 
 using namespace csculpt;
 using namespace csculpt::peer;
-using csculpt::peer::testing::sphere;
-using csculpt::peer::testing::stroked;
+using namespace csculpt::peer::testing;
 
 struct Host {
   Mesh base = sphere();
-  Hierarchy hierarchy =
-      Hierarchy::build(static_cast<std::uint32_t>(base.vertex_count()), base.triangles);
-  Merger merger{hierarchy};
+  Merger merger{*sphere_hierarchy()};
   MergeFrame frame = MergeFrame::fit(base.positions);
 };
 

@@ -12,8 +12,7 @@ namespace {
 
 using namespace csculpt;
 using namespace csculpt::peer;
-using csculpt::peer::testing::sphere;
-using csculpt::peer::testing::stroke_diff;
+using namespace csculpt::peer::testing;
 
 /// The versions a merger would publish: each a stroke from the one before, chained.
 std::vector<VersionRecord> history(std::size_t n) {

@@ -12,7 +12,7 @@ namespace {
 
 using namespace csculpt;
 using namespace csculpt::peer;
-using csculpt::peer::testing::sphere;
+using namespace csculpt::peer::testing;
 
 std::map<PeerId, std::vector<float>> sample_attribution(std::size_t n) {
   std::map<PeerId, std::vector<float>> a;
