@@ -87,7 +87,7 @@ class Transport {
   /// The next received message, without waiting; false when there is none. A message of more
   /// than one frame keeps its first payload frame (a well-behaved peer sends one).
   bool receive(Inbound& out);
-  /// Wakes wait() from any thread (async-signal-free, lock-free: one byte into a pipe).
+  /// Wakes wait() from any thread (one byte into a pipe: no lock, no ZeroMQ socket shared).
   void wake();
 
   /// Connections refused by the ZAP handler since the last call.

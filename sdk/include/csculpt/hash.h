@@ -10,7 +10,9 @@
 
 namespace csculpt {
 
-/// The word hash's starting value where a caller has no other (FNV-1a's 64-bit offset basis).
+/// The SDK's digests start from this value (the diff digest with hash_bytes, the hierarchy
+/// digest with fnv1a). It is FNV's 64-bit offset basis with its last decimal digit dropped, so
+/// fnv1a from here is not the published FNV-1a; the digests' values depend on it, keep it.
 constexpr std::uint64_t hash_seed = 1469598103934665603ull;
 
 /// One multiply-xorshift step of the word hash: folds the 64-bit word `w` into `h`.
@@ -35,8 +37,8 @@ inline std::uint64_t hash_bytes(std::uint64_t h, const void* data, std::size_t b
   return hash_mix(h, tail);
 }
 
-/// Byte-at-a-time 64-bit FNV-1a (start from hash_seed): slower, kept where its values are
-/// part of an interface (the hierarchy digest).
+/// Byte-at-a-time 64-bit FNV-1a step over `bytes` bytes: slower, kept where its values are part
+/// of an interface (the hierarchy digest, from hash_seed).
 inline std::uint64_t fnv1a(std::uint64_t h, const void* data, std::size_t bytes) {
   const auto* p = static_cast<const unsigned char*>(data);
   for (std::size_t i = 0; i < bytes; ++i) {
