@@ -6,33 +6,13 @@
 #include <sstream>
 
 #include "csculpt/error.h"
+#include "csculpt/hash.h"
 
 namespace csculpt {
 namespace {
 
 bool same_bits(const float* a, const float* b, std::uint32_t width) {
   return std::memcmp(a, b, sizeof(float) * width) == 0;
-}
-
-/// Word-at-a-time 64-bit hash (multiply-xorshift): the digest orders diffs canonically and
-/// runs over every changed value, so it must be cheap. Little-endian byte order.
-std::uint64_t mix(std::uint64_t h, const void* data, std::size_t bytes) {
-  const auto* p = static_cast<const unsigned char*>(data);
-  auto step = [&h](std::uint64_t w) {
-    h ^= w + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
-    h *= 0xff51afd7ed558ccdull;
-    h ^= h >> 32;
-  };
-  std::size_t i = 0;
-  for (; i + 8 <= bytes; i += 8) {
-    std::uint64_t w;
-    std::memcpy(&w, p + i, 8);
-    step(w);
-  }
-  std::uint64_t tail = bytes;
-  for (std::size_t k = 0; i < bytes; ++i, ++k) tail ^= std::uint64_t{p[i]} << (8 * (k + 1));
-  step(tail);
-  return h;
 }
 
 void validate_attribute(const AttributeDiff& a, std::uint32_t width, std::uint32_t vertex_count,
@@ -180,14 +160,14 @@ std::string to_json(const DiffStats& s) {
 }
 
 std::uint64_t digest(const Diff& diff) {
-  std::uint64_t h = 1469598103934665603ull;
-  h = mix(h, &diff.vertex_count, sizeof diff.vertex_count);
-  h = mix(h, diff.positions.indices.data(), diff.positions.indices.size() * 4);
-  h = mix(h, diff.positions.values.data(), diff.positions.values.size() * 4);
+  std::uint64_t h = hash_seed;
+  h = hash_bytes(h, &diff.vertex_count, sizeof diff.vertex_count);
+  h = hash_bytes(h, diff.positions.indices.data(), diff.positions.indices.size() * 4);
+  h = hash_bytes(h, diff.positions.values.data(), diff.positions.values.size() * 4);
   for (const auto& c : diff.channels) {
-    h = mix(h, c.desc.name.data(), c.desc.name.size());
-    h = mix(h, c.change.indices.data(), c.change.indices.size() * 4);
-    h = mix(h, c.change.values.data(), c.change.values.size() * 4);
+    h = hash_bytes(h, c.desc.name.data(), c.desc.name.size());
+    h = hash_bytes(h, c.change.indices.data(), c.change.indices.size() * 4);
+    h = hash_bytes(h, c.change.values.data(), c.change.values.size() * 4);
   }
   return h;
 }

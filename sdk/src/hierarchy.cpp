@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "csculpt/error.h"
+#include "csculpt/hash.h"
 
 namespace csculpt {
 namespace {
@@ -40,18 +41,9 @@ void counts_to_offsets(std::vector<std::uint32_t>& offsets) {
   for (std::size_t i = 1; i < offsets.size(); ++i) offsets[i] += offsets[i - 1];
 }
 
-std::uint64_t fnv1a(std::uint64_t h, const void* data, std::size_t bytes) {
-  const auto* p = static_cast<const unsigned char*>(data);
-  for (std::size_t i = 0; i < bytes; ++i) {
-    h ^= p[i];
-    h *= 1099511628211ull;
-  }
-  return h;
-}
-
 template <class T>
 std::uint64_t fnv1a(std::uint64_t h, const std::vector<T>& v) {
-  return fnv1a(h, v.data(), v.size() * sizeof(T));
+  return csculpt::fnv1a(h, v.data(), v.size() * sizeof(T));
 }
 
 struct WeightedParent {

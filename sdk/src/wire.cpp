@@ -8,6 +8,7 @@
 #include <string>
 
 #include "csculpt/error.h"
+#include "csculpt/varint.h"
 #include "diff_generated.h"
 
 namespace csculpt {
@@ -23,44 +24,12 @@ constexpr double max_quantum = 9.0e15;
 
 // ---- varints -------------------------------------------------------------------------------
 
-void put_varint(std::vector<std::uint8_t>& out, std::uint64_t v) {
-  while (v >= 0x80) {
-    out.push_back(static_cast<std::uint8_t>(v | 0x80));
-    v >>= 7;
-  }
-  out.push_back(static_cast<std::uint8_t>(v));
-}
-
 std::uint64_t zigzag(std::int64_t v) {
   return (static_cast<std::uint64_t>(v) << 1) ^ static_cast<std::uint64_t>(v >> 63);
 }
 std::int64_t unzigzag(std::uint64_t v) {
   return static_cast<std::int64_t>(v >> 1) ^ -static_cast<std::int64_t>(v & 1);
 }
-
-/// Reads varints from a byte range; every failure names what was being read.
-class VarintReader {
- public:
-  VarintReader(const std::uint8_t* data, std::size_t size, std::string what)
-      : p_(data), end_(data + size), what_(std::move(what)) {}
-  std::uint64_t next() {
-    std::uint64_t v = 0;
-    for (int shift = 0; shift < 64; shift += 7) {
-      if (p_ == end_) throw InvalidInput(what_ + ": truncated varint");
-      const std::uint8_t b = *p_++;
-      if (shift == 63 && b > 1) break;
-      v |= std::uint64_t{b & 0x7fu} << shift;
-      if (!(b & 0x80)) return v;
-    }
-    throw InvalidInput(what_ + ": varint longer than 64 bits");
-  }
-  bool done() const { return p_ == end_; }
-
- private:
-  const std::uint8_t* p_;
-  const std::uint8_t* end_;
-  std::string what_;  // owned: callers pass temporaries
-};
 
 // ---- encoding ------------------------------------------------------------------------------
 
@@ -71,14 +40,6 @@ struct EncodedAttribute {
   fb::ValueCoding coding = fb::ValueCoding::Float32;
   double step = 0;
 };
-
-void encode_indices(std::span<const std::uint32_t> indices, std::vector<std::uint8_t>& out) {
-  std::uint64_t next = 0;  // index[-1] + 1
-  for (const std::uint32_t i : indices) {
-    put_varint(out, i - next);
-    next = std::uint64_t{i} + 1;
-  }
-}
 
 /// `base` holds `width` floats per vertex of the base mesh.
 EncodedAttribute encode_attribute(const AttributeDiff& change, const float* base,
@@ -114,7 +75,7 @@ EncodedAttribute encode_attribute(const AttributeDiff& change, const float* base
   }
   if (!quantise) {
     e.count = static_cast<std::uint32_t>(n);
-    encode_indices(change.indices, e.index_gaps);
+    put_index_gaps(change.indices, e.index_gaps);
     e.values.resize(change.values.size() * sizeof(float));
     static_assert(std::endian::native == std::endian::little, "wire floats are little-endian");
     if (!e.values.empty()) std::memcpy(e.values.data(), change.values.data(), e.values.size());
@@ -122,7 +83,7 @@ EncodedAttribute encode_attribute(const AttributeDiff& change, const float* base
   }
   e.count = static_cast<std::uint32_t>(kept.size());
   e.step = step;
-  encode_indices(kept, e.index_gaps);
+  put_index_gaps(kept, e.index_gaps);
   // Planar, plain and predicted; keep the smaller.
   std::vector<std::uint8_t> plain, predicted;
   plain.reserve(q.size() * 2);
@@ -235,20 +196,8 @@ void decode_attribute(const fb::AttributeChanges* a, const float* base, std::uin
                        std::to_string(gaps->size()) + " bytes");
   out.indices.resize(count);
   if (count > 0) {
-    VarintReader r(gaps->data(), gaps->size(), what + " indices");
-    std::uint64_t next = 0;
-    for (std::uint32_t i = 0; i < count; ++i) {
-      // Checked before adding: a hostile gap near 2^64 would wrap around to a small index.
-      const std::uint64_t gap = r.next();
-      if (gap >= vertex_count - next)
-        throw InvalidInput(
-            what + ": vertex index " +
-            (gap > std::uint64_t{1} << 32 ? std::string("past 2^32") : std::to_string(next + gap)) +
-            " out of range (" + std::to_string(vertex_count) + " vertices)");
-      const std::uint64_t index = next + gap;
-      out.indices[i] = static_cast<std::uint32_t>(index);
-      next = index + 1;
-    }
+    IndexGapReader r(gaps->data(), gaps->size(), what);
+    for (std::uint32_t i = 0; i < count; ++i) out.indices[i] = r.next(vertex_count);
     if (!r.done())
       throw InvalidInput(what + ": bytes left over after " + std::to_string(count) + " indices");
   } else if (gaps && gaps->size() != 0) {

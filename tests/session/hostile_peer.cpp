@@ -26,19 +26,21 @@
 #include <vector>
 #include <zmq.hpp>
 
+#include "csculpt/error.h"
 #include "csculpt/peer/session.h"
+#include "csculpt/varint.h"
 #include "csculpt/wire.h"
 #include "diff_generated.h"
-#include "session_generated.h"
+#include "messages.h"
+#include "snapshot.h"
+#include "transport.h"
 
 namespace {
 
 namespace fb = csculpt::session;
 namespace wfb = csculpt::wire;
-using csculpt::peer::Invite;
-using csculpt::peer::PeerId;
+using namespace csculpt::peer;
 using Clock = std::chrono::steady_clock;
-using Bytes = std::vector<std::uint8_t>;
 
 std::mt19937_64 rng(12345);
 
@@ -51,30 +53,6 @@ Bytes random_bytes(std::size_t n) {
 void say(const std::string& json) {
   std::printf("%s\n", json.c_str());
   std::fflush(stdout);
-}
-
-std::array<std::uint8_t, 32> public_of(const std::array<std::uint8_t, 32>& secret) {
-  char z[41], pub[41];
-  zmq_z85_encode(z, secret.data(), 32);
-  zmq_curve_public(pub, z);
-  std::array<std::uint8_t, 32> out{};
-  zmq_z85_decode(out.data(), pub);
-  return out;
-}
-
-zmq::socket_t curve_dealer(zmq::context_t& ctx, const std::string& endpoint,
-                           const std::array<std::uint8_t, 32>& server_public,
-                           const std::array<std::uint8_t, 32>& client_secret,
-                           const std::array<std::uint8_t, 9>* routing_id = nullptr) {
-  zmq::socket_t s(ctx, zmq::socket_type::dealer);
-  if (routing_id) s.set(zmq::sockopt::routing_id, zmq::const_buffer(routing_id->data(), 9));
-  const auto client_public = public_of(client_secret);
-  s.set(zmq::sockopt::curve_serverkey, zmq::const_buffer(server_public.data(), 32));
-  s.set(zmq::sockopt::curve_publickey, zmq::const_buffer(client_public.data(), 32));
-  s.set(zmq::sockopt::curve_secretkey, zmq::const_buffer(client_secret.data(), 32));
-  s.set(zmq::sockopt::linger, 0);
-  s.connect(endpoint);
-  return s;
 }
 
 void send_all(zmq::socket_t& s, const std::vector<Bytes>& messages) {
@@ -116,8 +94,8 @@ int run_nokey(const Invite& inv, double seconds) {
     if (fd >= 0) ::close(fd);
   }
   zmq::context_t ctx;
-  const auto server_public = public_of(inv.server_secret);
-  std::array<std::uint8_t, 32> wrong_secret{}, wrong_server{};
+  const CurveKey server_public = curve_public(inv.server_secret);
+  CurveKey wrong_secret{}, wrong_server{};
   for (auto& b : wrong_secret) b = static_cast<std::uint8_t>(rng());
   for (auto& b : wrong_server) b = static_cast<std::uint8_t>(rng());
   {
@@ -131,7 +109,7 @@ int run_nokey(const Invite& inv, double seconds) {
   }
   {
     zmq::socket_t wrong_server_key =
-        curve_dealer(ctx, inv.endpoint, public_of(wrong_server), wrong_secret);
+        curve_dealer(ctx, inv.endpoint, curve_public(wrong_server), wrong_secret);
     send_all(wrong_server_key, garbage_set());
     std::this_thread::sleep_for(std::chrono::milliseconds(300));
     ++attempts;
@@ -162,16 +140,14 @@ struct Known {
 
 class Keyed {
  public:
+  // The peers' own transport: a CURVE ROUTER with the session's keys (its ZAP handler admits
+  // the members) and DEALERs whose routing id is 'P' + our id, as every peer checks.
   Keyed(const Invite& inv, PeerId self, bool overflow_epoch)
-      : inv_(inv), self_(self), overflow_epoch_(overflow_epoch) {
-    server_public_ = public_of(inv.server_secret);
-    router_ = zmq::socket_t(ctx_, zmq::socket_type::router);
-    router_.set(zmq::sockopt::curve_server, 1);
-    router_.set(zmq::sockopt::curve_secretkey, zmq::const_buffer(inv.server_secret.data(), 32));
-    router_.set(zmq::sockopt::linger, 0);
-    router_.bind("tcp://127.0.0.1:*");
-    endpoint_ = router_.get(zmq::sockopt::last_endpoint);
-  }
+      : inv_(inv),
+        self_(self),
+        overflow_epoch_(overflow_epoch),
+        transport_(inv, self, "tcp://127.0.0.1:*", std::size_t{64} << 20),
+        endpoint_(transport_.endpoint()) {}
 
   int run(double seconds) {
     const auto deadline = Clock::now() + std::chrono::duration<double>(seconds);
@@ -285,95 +261,70 @@ class Keyed {
         for (const auto& [id, k] : known_)
           send(k.endpoint, heartbeat(inv_.session, self_, 0), "heartbeat");
       }
-      zmq::pollitem_t item{router_.handle(), 0, ZMQ_POLLIN, 0};
-      zmq::poll(&item, 1, std::chrono::milliseconds(5));
-      if (!(item.revents & ZMQ_POLLIN)) continue;
-      zmq::message_t routing, payload;
-      if (!router_.recv(routing, zmq::recv_flags::dontwait)) continue;
-      if (!routing.more() || !router_.recv(payload, zmq::recv_flags::dontwait)) continue;
-      // libzmq may hand over a message inside its receive buffer at any address: FlatBuffers
-      // reads scalars in place, so copy to an aligned buffer first.
-      const Bytes copy(static_cast<const std::uint8_t*>(payload.data()),
-                       static_cast<const std::uint8_t*>(payload.data()) + payload.size());
-      const std::uint8_t* data = copy.data();
-      flatbuffers::Verifier verifier(data, copy.size(), 16, 10000);
-      if (!fb::VerifyEnvelopeBuffer(verifier)) continue;
-      const fb::Envelope* env = fb::GetEnvelope(data);
-      if (env->body_type() == fb::Body::Heartbeat) {
-        const fb::Heartbeat* hb = env->body_as_Heartbeat();
-        Known& k = known_[env->sender()];
-        k.version = hb->version();
-        k.chain = hb->chain();
-        k.merger = hb->merger();
-        k.epoch = env->epoch();
-        k.heard = true;
-        if (hb->members())
-          for (const fb::Member* m : *hb->members())
-            if (m->endpoint() && m->peer() != self_)
-              known_[m->peer()].endpoint = m->endpoint()->str();
-      } else if (env->body_type() == fb::Body::SnapshotChunk && vertex_count_ == 0) {
-        const fb::SnapshotChunk* c = env->body_as_SnapshotChunk();
-        if (!c->data() || c->total() > (std::size_t{1} << 30)) continue;
-        snapshot_.resize(c->total());
-        if (c->offset() + c->data()->size() > snapshot_.size()) continue;
-        std::memcpy(snapshot_.data() + c->offset(), c->data()->data(), c->data()->size());
-        received_ += c->data()->size();
-        if (received_ >= snapshot_.size()) {
-          flatbuffers::Verifier v(snapshot_.data(), snapshot_.size(), 8, 1000000, snapshot_.size());
-          if (v.VerifyBuffer<fb::MeshSnapshot>(nullptr)) {
-            const auto* s = flatbuffers::GetRoot<fb::MeshSnapshot>(snapshot_.data());
-            if (s->positions()) vertex_count_ = s->positions()->size() / 3;
-          }
-        }
+      transport_.wait(std::min<Clock::duration>(
+          std::chrono::milliseconds(5), std::max(Clock::duration::zero(), until - Clock::now())));
+      Inbound message;
+      while (transport_.receive(message)) learn_from(message);
+    }
+  }
+
+  /// What a member's heartbeat says (versions, chains, epochs, members) and the snapshot's
+  /// vertex count, read with the peers' own checks (open_envelope, SnapshotAssembly).
+  void learn_from(const Inbound& message) {
+    const Opened opened = open_envelope(
+        {static_cast<const std::uint8_t*>(message.payload.data()), message.payload.size()},
+        {static_cast<const std::uint8_t*>(message.routing.data()), message.routing.size()},
+        inv_.session, self_, storage_);
+    if (!opened.envelope) return;
+    const fb::Envelope* env = opened.envelope;
+    if (env->body_type() == fb::Body::Heartbeat) {
+      const fb::Heartbeat* hb = env->body_as_Heartbeat();
+      Known& k = known_[env->sender()];
+      k.version = hb->version();
+      k.chain = hb->chain();
+      k.merger = hb->merger();
+      k.epoch = env->epoch();
+      k.heard = true;
+      if (hb->members())
+        for (const fb::Member* m : *hb->members())
+          if (m->endpoint() && m->peer() != self_)
+            known_[m->peer()].endpoint = m->endpoint()->str();
+    } else if (env->body_type() == fb::Body::SnapshotChunk && vertex_count_ == 0) {
+      const fb::SnapshotChunk* c = env->body_as_SnapshotChunk();
+      if (!c->data() || c->total() > (std::size_t{1} << 30)) return;
+      try {
+        if (snapshot_.add(c->version(), c->chain(), c->offset(), c->total(),
+                          {c->data()->data(), c->data()->size()}))
+          vertex_count_ =
+              static_cast<std::uint32_t>(decode_snapshot(snapshot_.take()).mesh.vertex_count());
+      } catch (const csculpt::InvalidInput&) {
+        // a chunk outside its buffer or a snapshot that does not decode: learn nothing
       }
     }
   }
 
   // ---- message builders ----------------------------------------------------------------------
-  template <class Fill>
-  Bytes envelope(std::uint64_t session, PeerId sender, std::uint64_t epoch, fb::Body type,
-                 Fill&& fill) {
-    flatbuffers::FlatBufferBuilder b(256);
-    const flatbuffers::Offset<void> body = fill(b);
-    fb::EnvelopeBuilder e(b);
-    e.add_session(session);
-    e.add_sender(sender);
-    e.add_epoch(epoch);
-    e.add_body_type(type);
-    e.add_body(body);
-    fb::FinishEnvelopeBuffer(b, e.Finish());
-    return {b.GetBufferPointer(), b.GetBufferPointer() + b.GetSize()};
+  EnvelopeHeader as(PeerId sender, std::uint64_t epoch = 0) const {
+    return {inv_.session, sender, epoch};
   }
   Bytes heartbeat(std::uint64_t session, PeerId sender, std::uint64_t version, PeerId merger = 0,
                   std::uint64_t epoch = 0) {
-    return envelope(session, sender, epoch, fb::Body::Heartbeat,
-                    [&](auto& b) { return fb::CreateHeartbeat(b, version, 0, merger).Union(); });
+    return heartbeat_message({session, sender, epoch}, version, 0, merger);
   }
   Bytes hello(std::uint32_t protocol, bool wants_snapshot) {
-    return envelope(inv_.session, self_, 0, fb::Body::Hello, [&](auto& b) {
-      return fb::CreateHello(b, protocol, b.CreateString(endpoint_), b.CreateString("hostile"),
-                             wants_snapshot)
-          .Union();
-    });
+    return hello_message(as(self_), endpoint_, "hostile", wants_snapshot, protocol);
   }
-  Bytes elected(std::uint64_t epoch) {
-    return envelope(inv_.session, self_, epoch, fb::Body::Elected,
-                    [&](auto& b) { return fb::CreateElected(b, self_).Union(); });
-  }
-  Bytes leave() {
-    return envelope(inv_.session, self_, 0, fb::Body::Leave,
-                    [](auto& b) { return fb::CreateLeave(b).Union(); });
-  }
-  Bytes submit(const Bytes& diff) {
-    return envelope(inv_.session, self_, 0, fb::Body::Submit,
-                    [&](auto& b) { return fb::CreateSubmit(b, b.CreateVector(diff), 7).Union(); });
-  }
+  Bytes elected(std::uint64_t epoch) { return elected_message(as(self_, epoch), self_); }
+  Bytes leave() { return leave_message(as(self_)); }
+  Bytes submit(const Bytes& diff) { return submit_message(as(self_), diff, 7); }
   Bytes version(PeerId sender, std::uint64_t epoch, std::uint64_t v, std::uint64_t parent,
                 std::uint64_t chain, const Bytes& diff, bool replay) {
-    return envelope(inv_.session, sender, epoch, fb::Body::Version, [&](auto& b) {
-      return fb::CreateVersion(b, v, parent, chain, b.CreateVector(diff), 0, 0, 0.f, 0, replay)
-          .Union();
-    });
+    VersionRecord r;
+    r.version = v;
+    r.parent_chain = parent;
+    r.chain = chain;
+    r.diff_bytes = diff;
+    return version_message(as(sender, epoch), r, replay);
   }
   /// A DiffMessage built by hand (the codec refuses to write a bad one): empty, or moving
   /// vertex `vertex_count + 5` (out of range).
@@ -383,10 +334,7 @@ class Keyed {
     flatbuffers::Offset<wfb::AttributeChanges> positions = 0;
     if (out_of_range) {
       std::vector<std::uint8_t> gaps;
-      for (std::uint64_t v = vertex_count + 5;; v >>= 7) {
-        gaps.push_back(static_cast<std::uint8_t>((v & 0x7f) | (v >= 0x80 ? 0x80 : 0)));
-        if (v < 0x80) break;
-      }
+      csculpt::put_varint(gaps, std::uint64_t{vertex_count} + 5);
       const float value[3] = {0.5f, 0.5f, 0.5f};
       std::vector<std::uint8_t> values(12);
       std::memcpy(values.data(), value, 12);
@@ -401,32 +349,19 @@ class Keyed {
 
   void send(const std::string& endpoint, const Bytes& bytes, const std::string& what) {
     if (endpoint.empty()) return;
-    auto it = dealers_.find(endpoint);
-    if (it == dealers_.end()) {
-      // The routing id a peer checks every envelope's sender against: 'P' + the id (LE).
-      std::array<std::uint8_t, 9> rid{'P'};
-      for (int i = 0; i < 8; ++i) rid[1 + i] = static_cast<std::uint8_t>(self_ >> (8 * i));
-      it = dealers_
-               .emplace(endpoint,
-                        curve_dealer(ctx_, endpoint, server_public_, inv_.client_secret, &rid))
-               .first;
-    }
-    (void)it->second.send(zmq::buffer(bytes), zmq::send_flags::dontwait);
+    transport_.send(endpoint, bytes);
     ++sent_[what];
   }
 
-  zmq::context_t ctx_;
   Invite inv_;
   PeerId self_;
-  bool overflow_epoch_;
-  std::array<std::uint8_t, 32> server_public_{};
-  zmq::socket_t router_;
-  std::string endpoint_;
-  std::map<std::string, zmq::socket_t> dealers_;
-  std::map<PeerId, Known> known_;
-  std::map<std::string, int> sent_;
-  Bytes snapshot_;
-  std::size_t received_ = 0;
+  bool overflow_epoch_;  // overflow mode: only the epoch 2^64-1 claims
+  Transport transport_;
+  std::string endpoint_;                // ours, announced in hellos
+  std::map<PeerId, Known> known_;       // what each member last told us
+  std::map<std::string, int> sent_;     // what we sent, by kind, for the final report
+  SnapshotAssembly snapshot_;           // the inviter's snapshot, for the vertex count
+  std::vector<std::uint64_t> storage_;  // open_envelope's aligned copies
   std::uint32_t vertex_count_ = 0;
   Clock::time_point next_heartbeat_{};
 };
@@ -440,7 +375,7 @@ int main(int argc, char** argv) {
   }
   try {
     const std::string mode = argv[1];
-    const Invite inv = csculpt::peer::parse_invite(argv[2]);
+    const Invite inv = parse_invite(argv[2]);
     const double seconds = argc > 3 ? std::stod(argv[3]) : 2.0;
     if (mode == "nokey") return run_nokey(inv, seconds);
     if (mode == "keyed") return Keyed(inv, 900001, false).run(seconds);

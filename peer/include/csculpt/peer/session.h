@@ -48,6 +48,13 @@ struct SessionOptions {
   std::size_t max_snapshot_bytes = std::size_t{2} << 30;
 };
 
+/// Throws InvalidInput naming the first option out of range: an interval (sync, heartbeat,
+/// expired) outside 1 ms to 1 hour, membership thresholds not increasing, a negative, infinite
+/// or NaN tolerance, a position tolerance above 1 (it is a fraction of the frame), a name longer
+/// than max_author_bytes, message and chunk sizes that cannot carry a snapshot. Session::create
+/// and Session::join call it.
+void validate_options(const SessionOptions& options);
+
 enum class EventKind : std::uint32_t {
   joined = 0,          ///< this peer holds the session's mesh (a joiner: the snapshot came)
   version = 1,         ///< a merged version is ready for update()

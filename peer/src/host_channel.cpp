@@ -1,0 +1,91 @@
+#include "host_channel.h"
+
+namespace csculpt::peer {
+
+void HostChannel::post(Command c) {
+  std::lock_guard lock(mutex_);
+  commands_.push_back(std::move(c));
+}
+
+std::deque<Command> HostChannel::take_commands() {
+  std::deque<Command> out;
+  std::lock_guard lock(mutex_);
+  out.swap(commands_);
+  return out;
+}
+
+std::vector<HostItem> HostChannel::take_items() {
+  std::lock_guard lock(mutex_);
+  std::vector<HostItem> out(std::make_move_iterator(items_.begin()),
+                            std::make_move_iterator(items_.end()));
+  items_.clear();
+  return out;
+}
+
+void HostChannel::push_event(Event e) {
+  std::lock_guard lock(mutex_);
+  if (events_.size() >= kMaxEvents) events_.pop_front();
+  events_.push_back(std::move(e));
+}
+
+std::vector<Event> HostChannel::take_events() {
+  std::lock_guard lock(mutex_);
+  std::vector<Event> out(events_.begin(), events_.end());
+  events_.clear();
+  return out;
+}
+
+SessionStats HostChannel::stats() const {
+  std::lock_guard lock(mutex_);
+  return stats_;
+}
+
+std::vector<std::pair<PeerId, std::vector<float>>> HostChannel::attribution() const {
+  std::lock_guard lock(mutex_);
+  return {attribution_.begin(), attribution_.end()};
+}
+
+void HostChannel::set_frame_and_attribution(const MergeFrame& frame,
+                                            std::map<PeerId, std::vector<float>> attribution) {
+  std::lock_guard lock(mutex_);
+  frame_ = frame;
+  attribution_ = std::move(attribution);
+}
+
+Bytes HostChannel::encode_snapshot_of(const Mesh& mesh) const {
+  std::lock_guard lock(mutex_);
+  return encode_snapshot(mesh, frame_, attribution_);
+}
+
+void HostChannel::set_hierarchy(std::shared_ptr<const Hierarchy> hierarchy) {
+  std::lock_guard lock(mutex_);
+  hierarchy_ = std::move(hierarchy);
+}
+
+std::shared_ptr<const Hierarchy> HostChannel::hierarchy() const {
+  std::lock_guard lock(mutex_);
+  return hierarchy_;
+}
+
+void HostChannel::set_frame(const MergeFrame& frame) {
+  std::lock_guard lock(mutex_);
+  frame_ = frame;
+}
+
+MergeFrame HostChannel::frame() const {
+  std::lock_guard lock(mutex_);
+  return frame_;
+}
+
+void HostChannel::set_joined() {
+  std::lock_guard lock(mutex_);
+  joined_ = true;
+  joined_cv_.notify_all();
+}
+
+bool HostChannel::wait_joined(Millis timeout) {
+  std::unique_lock lock(mutex_);
+  return joined_cv_.wait_for(lock, timeout, [&] { return joined_; });
+}
+
+}  // namespace csculpt::peer

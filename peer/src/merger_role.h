@@ -1,0 +1,68 @@
+// The merger's role: the submits it holds for the next version (one per author, the latest
+// sequence), and the merge that turns them into that version's record (merged diff as sent,
+// hash chain, strokes, conflicts, attribution). Pure logic: no sockets, no threads.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "csculpt/diff.h"
+#include "csculpt/folds.h"
+#include "csculpt/hierarchy.h"
+#include "csculpt/merge.h"
+#include "csculpt/wire.h"
+#include "messages.h"
+
+namespace csculpt::peer {
+
+/// The session's wire options: the position tolerance is relative to the session's fixed
+/// frame (the first mesh's bounding-box diagonal), not recomputed from each version's mesh.
+EncodeOptions session_wire_options(const EncodeOptions& wire, const MergeFrame& frame);
+
+/// An author's edit since the agreed version, as the merger holds it.
+struct PendingSubmit {
+  std::uint64_t sequence = 0;  ///< the author's numbering: a later one replaces an earlier
+  std::uint32_t strokes = 0;   ///< strokes it carries (counted when merged)
+  Diff diff;                   ///< decoded against the agreed version's mesh
+};
+
+/// A merge's result: the version to publish and what it cost.
+struct MergeOutcome {
+  VersionRecord record;
+  std::uint32_t merged_strokes = 0;
+  std::uint32_t folds = 0;  ///< new folds (csculpt/folds.h), outside merge_ms
+};
+
+class MergerRole {
+ public:
+  /// Merges on `hierarchy` (the session mesh's connectivity).
+  explicit MergerRole(std::shared_ptr<const Hierarchy> hierarchy);
+
+  /// A submit by `author` of `diff_bytes` (a DiffMessage) at agreed version `version` with
+  /// mesh `base`. False (ignored) when based on another version: the author rebases and sends
+  /// again when it sees ours. Throws InvalidInput for a malformed diff.
+  bool accept(PeerId author, std::span<const std::uint8_t> diff_bytes, std::uint32_t strokes,
+              const Mesh& base, std::uint64_t version);
+  bool empty() const { return pending_.empty(); }
+  /// Forgets what `author` sent (it left) or everything (the version moved on, the merger
+  /// changed).
+  void forget(PeerId author) { pending_.erase(author); }
+  void clear() { pending_.clear(); }
+
+  /// Merges every held submit into the version after `version` (chain `chain`, mesh `base`)
+  /// and forgets them. The record's diff is encoded with `wire`; its chain is that of the
+  /// decoded diff, which every peer (this one too) applies. Needs !empty().
+  MergeOutcome merge(const Mesh& base, std::uint64_t version, std::uint64_t chain,
+                     const MergeFrame& frame, const EncodeOptions& wire);
+
+ private:
+  std::shared_ptr<const Hierarchy> hierarchy_;  // kept alive for merger_ and folds_
+  Merger merger_;
+  FoldCounter folds_;                        // the merge's quality count
+  std::map<PeerId, PendingSubmit> pending_;  // author -> its latest submit for this version
+};
+
+}  // namespace csculpt::peer

@@ -1,0 +1,149 @@
+// The network thread of one peer: PeerNode owns the transport, membership and election, the
+// replication state, the merger role and the snapshot assembly, and glues them together. It
+// sleeps in zmq_poll until a message, a host command (HostChannel + Transport::wake) or its
+// next timer (heartbeat, merge). Its only link to the host thread is the HostChannel.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "csculpt/hierarchy.h"
+#include "csculpt/merge.h"
+#include "csculpt/mesh.h"
+#include "csculpt/peer/membership.h"
+#include "csculpt/peer/session.h"
+#include "host_channel.h"
+#include "merger_role.h"
+#include "messages.h"
+#include "replication.h"
+#include "snapshot.h"
+#include "transport.h"
+
+namespace csculpt::peer {
+
+class PeerNode {
+ public:
+  /// Binds this peer's socket (the creator's endpoint goes into its invite). Throws IoError.
+  PeerNode(const Invite& invite, bool creator, const SessionOptions& options);
+  ~PeerNode();  ///< stop()
+  PeerNode(const PeerNode&) = delete;
+  PeerNode& operator=(const PeerNode&) = delete;
+
+  // ---- set-up, before run() ----------------------------------------------------------------
+  /// This peer holds version 0 of `mesh` and merges.
+  void start_as_creator(const Mesh& mesh);
+  /// This peer asks the invite's endpoint for a snapshot.
+  void start_as_joiner();
+  void run();
+  /// Tells the others this peer leaves and joins the thread (idempotent).
+  void stop();
+
+  // ---- any thread ------------------------------------------------------------------------
+  /// The host's side of the link (commands in; versions, events, stats out).
+  HostChannel& host() { return host_; }
+  /// Posts a command and wakes the thread.
+  void command(Command c);
+  PeerId id() const { return self_; }
+  const std::string& endpoint() const { return transport_.endpoint(); }
+  std::string invite_text() const;
+
+ private:
+  // the loop
+  void loop();
+  Clock::time_point next_deadline() const;
+  void receive_all();
+  bool run_commands();
+  void run_timers(Clock::time_point now);
+  void publish_stats();
+
+  // inbound
+  void handle(const Inbound& message, Clock::time_point now);
+  void dispatch(const fb::Envelope& env, Clock::time_point now);
+  void heard(PeerId peer, Clock::time_point now);
+  void on_hello(const fb::Envelope& env, const fb::Hello& hello, Clock::time_point now);
+  void on_heartbeat(const fb::Envelope& env, const fb::Heartbeat& hb, Clock::time_point now);
+  void learn_members(const fb::Heartbeat& hb, Clock::time_point now);
+  void on_leave(PeerId peer);
+  void on_elected(const fb::Envelope& env, PeerId merger);
+  void on_submit(PeerId sender, const fb::Submit& submit);
+  void on_version(const fb::Envelope& env, const fb::Version& v);
+  bool is_current_merger_version(const fb::Envelope& env);
+  void on_fetch(PeerId peer, std::uint64_t after);
+  void on_snapshot_chunk(const fb::SnapshotChunk& c);
+  void install_snapshot(std::shared_ptr<const Snapshot> snap);
+
+  // membership and election glue
+  void member_joined(PeerId peer, const std::string& endpoint);
+  void merger_changed();
+  void elect();
+  void expire(Clock::time_point now);
+
+  // replication glue
+  void apply_version(VersionRecord r);
+  void drain_buffered();
+  void add_contributions(const VersionRecord& r);
+  void check_divergence(PeerId merger, std::uint64_t version, std::uint64_t chain,
+                        Clock::time_point now);
+  void request_snapshot(PeerId from);
+  void send_snapshot(PeerId peer);
+
+  // outbound
+  EnvelopeHeader header() const;
+  void send_to_peer(PeerId peer, const Bytes& bytes);
+  void broadcast(const Bytes& bytes);
+  void heartbeat(Clock::time_point now);
+  void send_heartbeat_to(const std::string& endpoint);
+  Bytes hello(bool wants_snapshot) const;
+  void send_own_submit();
+  void merge_pending();
+  void build_merge_state();
+
+  // events and stats
+  void event(EventKind kind, PeerId peer, std::string message = "");
+  void dropped(const std::string& why);
+
+  SessionOptions options_;
+  Invite invite_;  // the session id and keys; its endpoint is the inviter's (joiner)
+  PeerId self_;
+  Transport transport_;
+  Membership membership_;  // who is alive, self included
+  Election election_;      // who merges, in which epoch
+  HostChannel host_;       // everything the host thread sees
+
+  /// Whether we hold the session's mesh (the creator at once, a joiner once its snapshot came);
+  /// before that we serve nothing and only greet the inviter.
+  bool joined_ = false;
+  std::string joining_endpoint_;  // the inviter's: greeted until the snapshot comes, kept open
+  Mesh base_;                     // the mesh of replication_.version()
+  Replication replication_;       // agreed version, hash chain, history, early arrivals
+  /// The version and chain each member last said it holds: a new merger first catches up with
+  /// the most advanced (it never publishes a number someone already holds).
+  std::map<PeerId, std::pair<std::uint64_t, std::uint64_t>> reported_;
+  /// Our last submit, kept until a merged version covers it: a new merger gets it again.
+  Command own_submit_;
+  std::optional<MergerRole> merger_;  // once the mesh (and so its hierarchy) is known
+  std::shared_ptr<const Hierarchy> hierarchy_;
+  MergeFrame frame_;           // the session's (first mesh's), for the merge and wire tolerances
+  SnapshotAssembly snapshot_;  // the chunks of the snapshot on its way to us
+  /// We asked for a snapshot (divergence): accept one older than our version.
+  bool snapshot_requested_ = false;
+
+  // rate limits
+  Clock::time_point next_heartbeat_{};         // the membership timer (greetings while joining)
+  Clock::time_point next_merge_{};             // the merger's sync timer
+  Clock::time_point next_fetch_{};             // one fetch per heartbeat interval
+  Clock::time_point next_join_hello_{};        // one greeting per snapshot's expected time
+  Clock::time_point next_divergence_check_{};  // one snapshot request per 4 heartbeats
+
+  std::vector<std::uint64_t> inbound_;  // aligned copy of a misaligned message
+  std::thread thread_;
+  bool stopped_ = false;  // stop() ran
+};
+
+}  // namespace csculpt::peer

@@ -1,0 +1,48 @@
+// Snapshots (the ZeroMQ guide's Clone pattern): the whole agreed mesh, the session's merge
+// frame and the attribution so far, as one MeshSnapshot FlatBuffer sent in chunks to a joiner
+// or to a peer that diverged. Pure logic: no sockets.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <span>
+#include <vector>
+
+#include "csculpt/merge.h"
+#include "csculpt/mesh.h"
+#include "csculpt/peer/membership.h"
+
+namespace csculpt::peer {
+
+struct Snapshot {
+  Mesh mesh;
+  MergeFrame frame;
+  std::map<PeerId, std::vector<float>> attribution;  ///< per peer, a value per vertex
+};
+
+std::vector<std::uint8_t> encode_snapshot(const Mesh& mesh, const MergeFrame& frame,
+                                          const std::map<PeerId, std::vector<float>>& attribution);
+/// Throws InvalidInput saying what is wrong: failed verification, a mesh that fails validate(),
+/// a missing frame or attribution of the wrong size.
+Snapshot decode_snapshot(std::span<const std::uint8_t> bytes);
+
+/// Collects one snapshot's chunks (any order; a chunk of another version or size restarts).
+class SnapshotAssembly {
+ public:
+  /// Adds a chunk; true when every byte is in (then take()). Throws InvalidInput for a chunk
+  /// outside its buffer.
+  bool add(std::uint64_t version, std::uint64_t chain, std::uint64_t offset, std::uint64_t total,
+           std::span<const std::uint8_t> data);
+  /// The assembled bytes; the assembly is empty afterwards (its memory freed).
+  std::vector<std::uint8_t> take();
+  std::uint64_t version() const { return version_; }
+  std::uint64_t chain() const { return chain_; }
+
+ private:
+  std::uint64_t version_ = ~std::uint64_t{0};  // of the snapshot being assembled; none yet
+  std::uint64_t chain_ = 0;
+  std::vector<std::uint8_t> buffer_;  // `total` bytes, filled as chunks come
+  std::size_t received_ = 0;          // bytes of chunks added (repeats count again)
+};
+
+}  // namespace csculpt::peer
