@@ -31,7 +31,7 @@ namespace {
 using test::first_difference;
 
 std::uint32_t sphere_k(std::uint32_t faces) {
-  return static_cast<std::uint32_t>(std::lround(std::sqrt(faces / 20.0)));
+  return static_cast<std::uint32_t>(std::lround(std::sqrt(static_cast<double>(faces) / 20.0)));
 }
 
 /// Every directed edge exactly once and its reverse exactly once (closed, 2-manifold at the
@@ -107,7 +107,7 @@ TEST(GenerateSphere, TheFaceCountIsTheClosestToTheTarget) {
   std::vector<std::uint32_t> wrong;
   for (std::uint32_t target = 0; target <= 1000; ++target) {
     const auto faces = static_cast<long>(make_sphere(target).face_count());
-    const auto k = static_cast<long>(std::lround(std::sqrt(faces / 20.0)));
+    const auto k = static_cast<long>(std::lround(std::sqrt(static_cast<double>(faces) / 20.0)));
     const long t = target;
     for (long other : {k - 1, k + 1}) {
       if (other >= 1 && std::labs(20 * other * other - t) < std::labs(faces - t)) {
@@ -265,9 +265,11 @@ TEST(GenerateStroke, SmoothNeedsTheTopologyAndFlattensTowardsTheNeighbours) {
     return sum;
   };
   EXPECT_LT(laplacian(smoothed), 0.5 * laplacian(noisy));
-  for (std::size_t v = 0; v < base.vertex_count(); ++v)
-    if (distance(noisy.positions[v], base.positions[0]) >= 0.5f)
+  for (std::size_t v = 0; v < base.vertex_count(); ++v) {
+    if (distance(noisy.positions[v], base.positions[0]) >= 0.5f) {
       ASSERT_EQ(smoothed.positions[v], noisy.positions[v]) << v;
+    }
+  }
 }
 
 TEST(GenerateStroke, ADegenerateRadiusIsRefusedOrHarmless) {

@@ -128,8 +128,8 @@ TEST(WorkerPool, ForChunksGivesTheSamePartitionWhateverThePoolSize) {
           chunks.emplace_back(b, e);
         });
         EXPECT_EQ(chunks.size(), expected.size()) << "no chunk twice";
-        EXPECT_EQ(std::set<std::pair<std::size_t, std::size_t>>(chunks.begin(), chunks.end()),
-                  expected);
+        const std::set<std::pair<std::size_t, std::size_t>> got(chunks.begin(), chunks.end());
+        EXPECT_EQ(got, expected);
         for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(covered[i].load(), 1) << i;
       }
     }
@@ -151,7 +151,8 @@ TEST(WorkerPool, ResultsDoNotDependOnThePoolSize) {
     WorkerPool pool(threads);
     std::vector<double> out(4099);
     pool.for_chunks(out.size(), 37, [&](std::size_t b, std::size_t e) {
-      for (std::size_t i = b; i < e; ++i) out[i] = static_cast<double>(i) * 0.5 + 1.0 / (1.0 + i);
+      for (std::size_t i = b; i < e; ++i)
+        out[i] = static_cast<double>(i) * 0.5 + 1.0 / (1.0 + static_cast<double>(i));
     });
     return out;
   };
