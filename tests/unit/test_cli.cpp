@@ -31,9 +31,12 @@
 #include "csculpt/scenarios.h"
 #include "mini_json.h"
 #include "test_meshes.h"
+#include "test_strokes.h"
 
 namespace csculpt {
 namespace {
+
+using test::stroke;
 
 namespace fs = std::filesystem;
 
@@ -118,15 +121,6 @@ Mesh with_strokes(const Mesh& base, std::initializer_list<Stroke> strokes) {
   Mesh m = base;
   for (const Stroke& s : strokes) apply_stroke(m, s);
   return m;
-}
-
-Stroke stroke(Stroke::Kind kind, Vec3f center, float radius, float strength) {
-  Stroke s;
-  s.kind = kind;
-  s.center = center;
-  s.radius = radius;
-  s.strength = strength;
-  return s;
 }
 
 /// The base sphere with material channels and three overlapping edits of it.

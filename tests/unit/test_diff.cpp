@@ -18,6 +18,7 @@
 #include "csculpt/generate.h"
 #include "csculpt/mesh.h"
 #include "test_meshes.h"
+#include "test_strokes.h"
 #include "test_support.h"
 
 namespace csculpt {
@@ -51,12 +52,8 @@ const ChannelDiff& channel_diff(const Diff& d, const std::string& name) {
 Mesh sculpted(const Mesh& base, std::uint64_t seed) {
   Mesh m = base;
   for (const Stroke& s : scripted_strokes(base, seed, 12)) apply_stroke(m, s);
-  Stroke paint;
-  paint.kind = Stroke::Kind::paint;
-  paint.center = base.positions[seed % base.vertex_count()];
-  paint.radius = 0.4f;
-  paint.strength = 0.8f;
-  apply_stroke(m, paint);
+  apply_stroke(
+      m, test::stroke(Stroke::Kind::paint, base.positions[seed % base.vertex_count()], 0.4f, 0.8f));
   return m;
 }
 
