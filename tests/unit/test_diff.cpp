@@ -9,7 +9,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <limits>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -156,6 +158,34 @@ TEST(DiffCapture, OfRawArraysMatchesTheMeshCaptureAndHonoursTheWidth) {
   const AttributeDiff w1 = capture_attribute(base, edited, 1);
   EXPECT_EQ(w1.indices, (std::vector<std::uint32_t>{5, 11}));
   EXPECT_TRUE(capture_attribute(base, base, 3).empty());
+}
+
+TEST(DiffCaptureDeathTest, RawArraysOfAnotherLengthOrOfWidthZeroAreRefused) {
+  // capture_attribute is the host's entry (raw arrays); arrays that do not describe the same
+  // vertices must be refused like a mesh of another layout, not read past the shorter one.
+  // The short array is the front of a longer buffer, so reading past it is no memory error
+  // here and the test fails cleanly.
+  const std::vector<float> base = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11};
+  const std::vector<float> storage = {0, 1, 2, 3, 4, 5, 60, 70, 80, 90, 100, 110};
+  const std::span<const float> shorter(storage.data(), 6);
+  EXPECT_NE(invalid_input_message([&] { capture_attribute(base, shorter, 3); }), "")
+      << "6 edited values against 12 base values";
+  EXPECT_NE(invalid_input_message([&] { capture_attribute(shorter, base, 3); }), "")
+      << "12 edited values against 6 base values";
+  EXPECT_NE(invalid_input_message([&] { capture_attribute(base, base, 5); }), "")
+      << "12 values are not whole vertices of width 5";
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  EXPECT_EXIT(
+      {
+        try {
+          capture_attribute(base, base, 0);
+        } catch (const InvalidInput&) {
+          std::_Exit(0);
+        }
+        std::_Exit(1);
+      },
+      ::testing::ExitedWithCode(0), "")
+      << "width 0: refused (not a division by zero)";
 }
 
 TEST(DiffCapture, RejectsAnEditOfOtherConnectivityOrChannelLayout) {

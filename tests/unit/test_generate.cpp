@@ -112,7 +112,8 @@ TEST(GenerateSphere, TheFaceCountIsTheClosestToTheTarget) {
   }
   EXPECT_TRUE(wrong.empty()) << wrong.size() << " targets get a farther face count, the first "
                              << (wrong.empty() ? 0 : wrong[0]) << " gets "
-                             << (wrong.empty() ? 0 : make_sphere(wrong[0]).face_count());
+                             << (wrong.empty() ? 0 : make_sphere(wrong[0]).face_count())
+                             << " faces (k rounded in sqrt space, not by face count)";
 }
 
 TEST(GenerateSphere, IsDeterministicAndMaterialsAreTheBuiltInChannels) {
@@ -275,7 +276,9 @@ TEST(GenerateStroke, ADegenerateRadiusIsRefusedOrHarmless) {
   for (auto kind : {Stroke::Kind::grab, Stroke::Kind::inflate, Stroke::Kind::detail,
                     Stroke::Kind::twist, Stroke::Kind::bend, Stroke::Kind::paint}) {
     for (float radius : {0.f, -0.5f}) {
-      SCOPED_TRACE("kind " + std::to_string(static_cast<int>(kind)) + " radius " +
+      static const char* const names[] = {"grab", "inflate", "detail", "twist",
+                                          "bend", "smooth",  "paint"};
+      SCOPED_TRACE(std::string(names[static_cast<int>(kind)]) + " of radius " +
                    std::to_string(radius));
       Mesh m = base;
       try {
