@@ -31,9 +31,12 @@
 #include "csculpt/testkit/scenarios.h"
 #include "mini_json.h"
 #include "test_meshes.h"
+#include "test_strokes.h"
 
 namespace csculpt {
 namespace {
+
+using test::stroke;
 
 namespace fs = std::filesystem;
 
@@ -120,15 +123,6 @@ Mesh with_strokes(const Mesh& base, std::initializer_list<Stroke> strokes) {
   return m;
 }
 
-Stroke stroke(Stroke::Kind kind, Vec3f center, float radius, float strength) {
-  Stroke s;
-  s.kind = kind;
-  s.center = center;
-  s.radius = radius;
-  s.strength = strength;
-  return s;
-}
-
 /// The base sphere with material channels and three overlapping edits of it.
 struct Fixture {
   Mesh base;
@@ -206,17 +200,22 @@ TEST_F(Cli, MergeWritesExactlyWhatMergeMeshesComputes) {
 
 TEST_F(Cli, HelpWorksForEverySubcommand) {
   const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
-      {"--help", {"merge", "hierarchy", "diff", "scenarios", "demo", "bench"}},
+      {"--help", {"merge", "hierarchy", "diff", "scenarios", "demo", "peer", "bench"}},
       {"merge --help", {"--method", "--k", "-o", "--out", "base", "edits", "--explain", "--ideal"}},
       {"hierarchy --help", {"--k", "mesh"}},
       {"diff --help", {"base", "edited"}},
       {"scenarios --help", {"--faces", "--json"}},
-      {"bench --help", {"merge"}},
+      {"bench --help", {"merge", "wire", "session"}},
       {"bench merge --help", {"--faces", "--users", "--repeat", "--method", "--k"}},
       {"demo --help",
        {"--peers", "--seconds", "--faces", "--sync-ms", "--out", "--seed", "--strokes-per-second",
-        "--replay"}},
-      {"bench session --help", {"--faces", "--peers", "--sync-ms", "--samples"}},
+        "--replay", "--converge-timeout"}},
+      {"peer --help",
+       {"--join", "--faces", "--id", "--name", "--bind", "--sync-ms", "--heartbeat-ms",
+        "--evasive-ms", "--expired-ms", "--join-timeout-ms", "--seconds", "--strokes-per-second",
+        "--seed", "--linger", "--ignore-stdin", "--out"}},
+      {"bench session --help", {"--faces", "--peers", "--sync-ms", "--samples", "--seed"}},
+      {"bench wire --help", {"--faces", "--touched", "--tolerance", "--repeat"}},
   };
   for (const auto& [args, mentions] : cases) {
     const Result r = run(args);
@@ -224,6 +223,65 @@ TEST_F(Cli, HelpWorksForEverySubcommand) {
     for (const std::string& m : mentions)
       EXPECT_TRUE(contains_ci(r.out, m)) << args << " does not mention " << m << ":\n" << r.out;
   }
+}
+
+/// The subcommands a help text lists: CLI11 prints a "Subcommands:" heading, then one line per
+/// subcommand, two spaces, its name, then its description, up to a blank line (a description
+/// that goes on to a second line continues deeper indented).
+std::vector<std::string> listed_subcommands(const std::string& help) {
+  std::vector<std::string> names;
+  bool in_section = false;
+  for (const std::string& line : lines_of(help)) {
+    if (line == "Subcommands:") {
+      in_section = true;
+    } else if (in_section && line.empty()) {
+      break;
+    } else if (in_section && line.size() > 2 && line.rfind("  ", 0) == 0 && line[2] != ' ') {
+      names.push_back(line.substr(2, line.find(' ', 2) - 2));
+    }
+  }
+  return names;
+}
+
+/// Whether the help's "Usage:" line names `command` ("bench wire") right after the program.
+bool usage_names(const std::string& help, const std::string& command) {
+  for (const std::string& line : lines_of(help)) {
+    if (line.rfind("Usage:", 0) != 0) continue;
+    const std::string with_space = " " + command + " ";
+    const std::string at_end = " " + command;
+    return line.find(with_space) != std::string::npos ||
+           (line.size() >= at_end.size() &&
+            line.compare(line.size() - at_end.size(), at_end.size(), at_end) == 0);
+  }
+  return false;
+}
+
+TEST_F(Cli, HelpOfEverySubcommandTheProgramListsNamesIt) {
+  // Driven by the program's own lists (top level, then each listed command's own), so a new
+  // subcommand is covered without touching this test.
+  const Result top = run("--help");
+  ASSERT_EQ(top.code, 0) << top.err;
+  std::vector<std::string> commands = listed_subcommands(top.out);
+  for (std::size_t i = 0; i < commands.size(); ++i) {
+    const std::string command = commands[i];  // commands grows below
+    SCOPED_TRACE(command);
+    const Result r = run(command + " --help");
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.err, "");
+    EXPECT_TRUE(usage_names(r.out, command)) << "the usage line does not name it:\n" << r.out;
+    for (const std::string& sub : listed_subcommands(r.out))
+      commands.push_back(command + " " + sub);
+  }
+  for (const char* expected : {"merge", "hierarchy", "diff", "scenarios", "demo", "peer", "bench",
+                               "bench merge", "bench wire", "bench session"}) {
+    EXPECT_NE(std::find(commands.begin(), commands.end(), expected), commands.end())
+        << expected << " is not listed; found:\n"
+        << ::testing::PrintToString(commands);
+  }
+  // the parser itself: a usage line that names another command does not count
+  EXPECT_FALSE(usage_names("Usage: csculpt bench merge [OPTIONS]\n", "bench wire"));
+  EXPECT_FALSE(usage_names("Usage: csculpt benchmark\n", "bench"));
+  EXPECT_TRUE(usage_names("Usage: /x/csculpt bench\n", "bench"));
 }
 
 // ---- bad input ---------------------------------------------------------------------------
