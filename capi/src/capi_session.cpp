@@ -1,7 +1,5 @@
 // The C ABI of sessions (csc_session): create, join, submit, update, poll, statistics.
-#include <cmath>
 #include <cstring>
-#include <exception>
 #include <new>
 #include <string>
 
@@ -24,36 +22,19 @@ csculpt::peer::SessionOptions session_options(const csc_session_options* in) {
     so.name = o.name;
   }
   so.id = o.id;
-  if (o.sync_ms < 1 || o.heartbeat_ms < 1 || o.evasive_ms <= o.heartbeat_ms ||
-      o.expired_ms <= o.evasive_ms)
-    bad_argument("options: need sync_ms >= 1 and heartbeat_ms < evasive_ms < expired_ms");
+  // The ranges of these values are the peer layer's to check (peer::validate_options, below):
+  // one rule, one message, whichever API the host uses.
   so.sync = csculpt::peer::Millis{o.sync_ms};
   so.membership = {csculpt::peer::Millis{o.heartbeat_ms}, csculpt::peer::Millis{o.evasive_ms},
                    csculpt::peer::Millis{o.expired_ms}};
-  if (!(o.position_tolerance >= 0) || !(o.channel_tolerance >= 0) ||
-      !std::isfinite(o.position_tolerance) || !std::isfinite(o.channel_tolerance))
-    bad_argument("options: tolerances must be finite and >= 0");
   so.wire.position_tolerance = o.position_tolerance;
   so.wire.channel_tolerance = o.channel_tolerance;
-  return so;
-}
-
-/// Runs `open` (a session's create or join). What the transport throws (anything but the SDK's
-/// own errors and bad_alloc) is an input/output failure, reported after `what`: the C ABI
-/// names no transport type, so the peer layer can translate its errors itself.
-template <class Open>
-std::unique_ptr<csculpt::peer::Session> open_session(const std::string& what, Open&& open) {
   try {
-    return open();
-  } catch (const csculpt::InvalidInput&) {
-    throw;
-  } catch (const csculpt::IoError&) {
-    throw;
-  } catch (const std::bad_alloc&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw csculpt::IoError(what + e.what());
+    csculpt::peer::validate_options(so);
+  } catch (const InvalidInput& e) {
+    bad_argument(e.what());  // the host passed them: an argument error in the C ABI's terms
   }
+  return so;
 }
 
 std::unique_ptr<csc_session> new_session(std::unique_ptr<csculpt::peer::Session> s) {
@@ -97,9 +78,7 @@ CSC_API csc_status csc_session_create(csc_session** out, const csc_mesh* mesh,
     require_pointer(out, "out");
     const csculpt::Mesh& m = handle(mesh, Tag::mesh, "mesh").mesh;
     const csculpt::peer::SessionOptions so = session_options(options);
-    *out = new_session(open_session(std::string("cannot listen on '") + so.bind + "': ", [&] {
-             return csculpt::peer::Session::create(m, so);
-           })).release();
+    *out = new_session(csculpt::peer::Session::create(m, so)).release();
   });
 }
 
@@ -111,10 +90,9 @@ CSC_API csc_status csc_session_join(csc_session** out, const char* invite,
     const csc_session_options defaults = CSC_SESSION_OPTIONS_INIT;
     const csc_session_options o = options ? read_in(options, defaults, "options") : defaults;
     const csculpt::peer::SessionOptions so = session_options(options);
-    *out =
-        new_session(open_session("cannot join: ", [&] {
-          return csculpt::peer::Session::join(invite, so, csculpt::peer::Millis{o.join_timeout_ms});
-        })).release();
+    *out = new_session(
+               csculpt::peer::Session::join(invite, so, csculpt::peer::Millis{o.join_timeout_ms}))
+               .release();
   });
 }
 

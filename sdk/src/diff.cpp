@@ -47,6 +47,12 @@ std::size_t Diff::touched_vertices() const {
 
 AttributeDiff capture_attribute(std::span<const float> base, std::span<const float> edited,
                                 std::uint32_t width) {
+  if (width == 0) throw InvalidInput("capture_attribute: width 0");
+  if (base.size() != edited.size() || base.size() % width != 0)
+    throw InvalidInput("capture_attribute: " + std::to_string(base.size()) + " base and " +
+                       std::to_string(edited.size()) +
+                       " edited values are not the same whole vertices of width " +
+                       std::to_string(width));
   AttributeDiff d;
   const std::size_t n = base.size() / width;
   for (std::size_t v = 0; v < n; ++v) {

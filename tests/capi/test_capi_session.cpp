@@ -149,7 +149,7 @@ TEST(CapiSession, BadArgumentsAndInvitesAreRefusedClearly) {
   csc_session_options o = CSC_SESSION_OPTIONS_INIT;
   o.expired_ms = o.evasive_ms;
   EXPECT_EQ(csc_session_create(&s, mesh, &o), CSC_ERROR_INVALID_ARGUMENT);
-  EXPECT_NE(std::string(csc_last_error()).find("evasive_ms"), std::string::npos);
+  EXPECT_NE(std::string(csc_last_error()).find("evasive"), std::string::npos);
   o = CSC_SESSION_OPTIONS_INIT;
   o.bind = "tcp://256.1.1.1:1";
   EXPECT_EQ(csc_session_create(&s, mesh, &o), CSC_ERROR_IO);

@@ -5,7 +5,7 @@
 #include <memory>
 
 #include "csculpt/diff.h"
-#include "csculpt/generate.h"
+#include "csculpt/testkit/generate.h"
 #include "csculpt/hierarchy.h"
 #include "csculpt/mesh.h"
 

@@ -5,7 +5,7 @@
 #include <functional>
 
 #include "csculpt/error.h"
-#include "csculpt/generate.h"
+#include "csculpt/testkit/generate.h"
 #include "csculpt/peer/session.h"
 
 namespace {

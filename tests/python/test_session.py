@@ -206,7 +206,7 @@ class Errors(unittest.TestCase):
                     with self.assertRaises(csculpt.InvalidArgument):
                         csculpt.Session.create(mesh, **bad)
             # The library's own checks come through with its message.
-            with self.assertRaisesRegex(csculpt.InvalidArgument, "evasive_ms"):
+            with self.assertRaisesRegex(csculpt.InvalidArgument, "evasive"):
                 csculpt.Session.create(mesh, evasive_ms=600, expired_ms=600)
             with self.assertRaisesRegex(csculpt.InvalidArgument, "tolerance"):
                 csculpt.Session.create(mesh, position_tolerance=-1.0)

@@ -17,7 +17,7 @@
 
 #include "csculpt/diff.h"
 #include "csculpt/error.h"
-#include "csculpt/generate.h"
+#include "csculpt/testkit/generate.h"
 #include "csculpt/mesh.h"
 #include "test_meshes.h"
 #include "test_strokes.h"

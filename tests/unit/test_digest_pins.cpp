@@ -7,7 +7,7 @@
 #include <cstdint>
 
 #include "csculpt/diff.h"
-#include "csculpt/generate.h"
+#include "csculpt/testkit/generate.h"
 #include "csculpt/hierarchy.h"
 
 namespace {

@@ -1,4 +1,4 @@
-// The built-in test-mesh generators (csculpt/generate.h): make_sphere gives a valid closed,
+// The built-in test-mesh generators (csculpt/testkit/generate.h): make_sphere gives a valid closed,
 // consistently oriented unit sphere with the documented counts, the face count closest to the
 // one asked for; vertex_normals; each stroke kind does what it says and nothing outside its
 // radius; scripted_strokes is deterministic for a seed, gives the count asked for and only the
@@ -19,9 +19,9 @@
 #include <vector>
 
 #include "csculpt/error.h"
-#include "csculpt/generate.h"
 #include "csculpt/hierarchy.h"
 #include "csculpt/mesh.h"
+#include "csculpt/testkit/generate.h"
 #include "csculpt/vec3.h"
 #include "test_meshes.h"
 #include "test_strokes.h"
@@ -128,7 +128,9 @@ TEST(GenerateSphere, IsDeterministicAndMaterialsAreTheBuiltInChannels) {
     const Channel& ch = m.channels[c];
     EXPECT_EQ(ch.desc, expected[c]);
     ASSERT_EQ(ch.values.size(), m.vertex_count() * ch.desc.width);
-    const float fill = ch.desc.name == "metallic" ? 0.f : 0.5f;  // grey rough dielectric
+    const float fill = ch.desc.name == "metallic"    ? default_metallic
+                       : ch.desc.name == "roughness" ? default_roughness
+                                                     : default_albedo;  // grey rough dielectric
     for (float v : ch.values) ASSERT_EQ(v, fill) << ch.desc.name;
   }
   EXPECT_NO_THROW(validate(m, "sphere with materials"));

@@ -1,8 +1,8 @@
-// A stroke of the built-in artist (csculpt/generate.h) from the four values the unit tests
+// A stroke of the built-in artist (csculpt/testkit/generate.h) from the four values the unit tests
 // vary; the rest keep Stroke's defaults.
 #pragma once
 
-#include "csculpt/generate.h"
+#include "csculpt/testkit/generate.h"
 
 namespace csculpt::test {
 

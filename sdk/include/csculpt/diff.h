@@ -41,7 +41,8 @@ struct Diff {
 /// Throws InvalidInput if the connectivity or channel layout differs.
 Diff capture_diff(const Mesh& base, const Mesh& edited);
 
-/// Capture from raw arrays (what a host holds): positions as xyz floats.
+/// Capture from raw arrays (what a host holds): positions as xyz floats. Throws InvalidInput
+/// unless both arrays hold the same number of whole vertices of `width` (> 0) values.
 AttributeDiff capture_attribute(std::span<const float> base, std::span<const float> edited,
                                 std::uint32_t width);
 

@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <string>
 
 #include "csculpt/dual_quat.h"
+#include "csculpt/error.h"
 #include "csculpt/testkit/random.h"
 #include "csculpt/vec3.h"
 
@@ -38,8 +40,15 @@ Quat axis_angle(Vec3f axis, float angle) {
 }  // namespace
 
 Mesh make_sphere(std::uint32_t target_faces, bool materials) {
-  const auto k = static_cast<std::uint32_t>(
-      std::max(1.0, std::round(std::sqrt(static_cast<double>(target_faces) / 20.0))));
+  // 20 k^2 faces: of the two k around sqrt(target / 20), the one whose count is closer
+  // (the smaller on a tie).
+  const auto below = static_cast<std::uint32_t>(
+      std::max(1.0, std::floor(std::sqrt(static_cast<double>(target_faces) / 20.0))));
+  auto distance = [&](std::uint64_t k) {
+    const std::uint64_t faces = 20 * k * k;
+    return faces > target_faces ? faces - target_faces : target_faces - faces;
+  };
+  const std::uint32_t k = distance(below + 1) < distance(below) ? below + 1 : below;
   const float t = (1.f + std::sqrt(5.f)) / 2.f;
   const std::array<Vec3f, 12> ico = {{{-1, t, 0},
                                       {1, t, 0},
@@ -127,6 +136,9 @@ std::vector<Vec3f> vertex_normals(const Mesh& mesh) {
 }
 
 void apply_stroke(Mesh& mesh, const Stroke& s, const Topology* topology) {
+  if (!(s.radius > 0) || !std::isfinite(s.radius))
+    throw InvalidInput("apply_stroke: the radius must be positive and finite, not " +
+                       std::to_string(s.radius));
   const std::size_t n = mesh.vertex_count();
   const Vec3f axis = unit(s.axis);
   switch (s.kind) {
@@ -211,6 +223,8 @@ void apply_stroke(Mesh& mesh, const Stroke& s, const Topology* topology) {
 
 std::vector<Stroke> scripted_strokes(const Mesh& mesh, std::uint64_t seed, std::uint32_t count,
                                      bool paint) {
+  if (count > 0 && mesh.vertex_count() == 0)
+    throw InvalidInput("scripted_strokes: the mesh has no vertex to anchor a stroke to");
   Rng rng;
   rng.state = seed * 0x2545F4914F6CDD1Dull + 17;
   const float diag = bbox_diagonal(mesh.positions);

@@ -34,7 +34,7 @@ struct SessionOptions {
   std::string name;
   /// This peer's id (the election picks the lowest live id); 0 = random.
   PeerId id = 0;
-  /// The merger merges this often (50 ms to minutes; the paper used 5 s and 20 s).
+  /// The merger merges this often (at least 1 ms, see validate_options; the paper used 5 s and 20 s).
   Millis sync{250};
   MembershipOptions membership;
   /// Wire tolerances of submitted and merged diffs (see wire.h); with position_scale 0 the

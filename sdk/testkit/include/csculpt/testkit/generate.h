@@ -46,12 +46,13 @@ struct Stroke {
 };
 
 /// Applies the stroke to `mesh` in place (positions, or the material channels for paint,
-/// which are added if missing). `topology` is needed for smooth only.
+/// which are added if missing). `topology` is needed for smooth only. Throws InvalidInput on
+/// a radius that is not positive and finite.
 void apply_stroke(Mesh& mesh, const Stroke& stroke, const Topology* topology = nullptr);
 
 /// A deterministic artist: `count` strokes at mixed scales (soft brushes as big as half the
 /// model, medium inflates, fine detail, occasional twists and paint) around the surface of
-/// `mesh`, from `seed`.
+/// `mesh`, from `seed`. Throws InvalidInput when strokes are asked of a mesh without vertices.
 std::vector<Stroke> scripted_strokes(const Mesh& mesh, std::uint64_t seed, std::uint32_t count,
                                      bool paint = true);
 
