@@ -32,10 +32,11 @@ struct Phase {
   int attempts;
 };
 
-/// Gentle first (one ring, eighths), then wider and firmer: measured on the Blender cases,
+/// Gentle first (one ring, eighths), then wider and firmer, for as long as folds remain (48
+/// attempts: the four-artist demo sessions need up to that many). Measured on the Blender cases,
 /// the first phase ends the folds of a strong detail on a bend at half of addition's error
 /// there, the second those of overlapping grabs and smoothing.
-constexpr Phase kPhases[] = {{Target::addition, 1, 8, 12}, {Target::dominant, 2, 4, 16}};
+constexpr Phase kPhases[] = {{Target::addition, 1, 8, 12}, {Target::dominant, 2, 4, 48}};
 
 struct Repair {
   const Topology& topology;
