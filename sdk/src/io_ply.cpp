@@ -4,6 +4,10 @@
 // element's vertex_indices/vertex_index list gives polygons, fan-triangulated. Everything
 // else (normals in lists, edges, materials, other face properties) is skipped, in all three
 // encodings, by walking its declared layout.
+//
+// Index (section lines "// ----"): scalar types; channel layout (property names ->
+// channels); header (parse_header and its lines); body cursors and reading (read_body);
+// parse_ply; writing (encode_ply).
 #include <algorithm>
 #include <array>
 #include <bit>

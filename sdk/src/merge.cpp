@@ -6,6 +6,15 @@
 // word by word from the list at the next pass), and the merged result is computed only for the
 // ancestors of vertices some diff changed. Untouched vertices keep their exact base values (paper's
 // identity).
+// Index (search for the section lines "// ----"):
+//   The two algebras the pipeline runs on      DqOps (isometries), VecOps (translations)
+//   Sparse per-level storage                   SparseLevel, SparsePyramid, decompose,
+//                                              blend_residuals, blend_and_reconstruct
+//   The Merger                                 Workspace, Merger::merge, Merger::Pass
+//   positions as isometries                    full (frame transport + fold repair) and the
+//                                              paper's hierarchy methods
+//   positions as translations                  multiscale-translation, weighted, average, sum
+//   channels                                   materials in their linear spaces
 #include "csculpt/merge.h"
 
 #include <algorithm>
@@ -693,6 +702,7 @@ std::vector<std::size_t> canonical_order(std::span<const Diff* const> diffs,
 }  // namespace
 
 // ---------------------------------------------------------------------------------------
+// The Merger: its workspace, validation, and the pass (Merger::Pass) that runs the steps.
 
 struct Merger::Workspace {
   std::vector<SparsePyramid<DualQuat>> dq_users;
