@@ -33,8 +33,8 @@ struct Phase {
 };
 
 /// Gentle first (one ring, eighths), then wider and firmer, for as long as folds remain (48
-/// attempts: the four-artist demo sessions need up to that many). Measured on the Blender cases,
-/// the first phase ends the folds of a strong detail on a bend at half of addition's error
+/// attempts: 16 left folds in a four-artist demo session, 48 did not). Measured on the Blender
+/// cases, the first phase ends the folds of a strong detail on a bend at half of addition's error
 /// there, the second those of overlapping grabs and smoothing.
 constexpr Phase kPhases[] = {{Target::addition, 1, 8, 12}, {Target::dominant, 2, 4, 48}};
 
@@ -53,23 +53,13 @@ struct Repair {
 
   bool is_new_fold(std::uint32_t f) const {
     const Triangle& t = topology.triangles[f];
-    const Vec3d n = base_normal(base, t);
-    const Vec3d m = face_normal(position(t[0]), position(t[1]), position(t[2]));
-    return opposed(n, m) && !flipped_by_a_diff(base, diffs, t, n);
+    return detail::is_new_fold(base, diffs, t,
+                               face_normal(position(t[0]), position(t[1]), position(t[2])));
   }
 
   bool in_region(std::uint32_t v) const {
     const std::uint32_t i = s.slot[v];
     return i != kNone && s.ring[i] != kNone;
-  }
-
-  /// Whether `v` is the lowest vertex of `t` for which `in` holds: a face around several
-  /// listed vertices is tested once.
-  template <class In>
-  static bool lowest_of(const Triangle& t, std::uint32_t v, In&& in) {
-    for (std::uint32_t u : t)
-      if (u < v && in(u)) return false;
-    return true;
   }
 
   /// Appends to `out` the new folds among the faces around vertex `i` of the list that `in`
@@ -78,7 +68,7 @@ struct Repair {
   void collect_folds_at(std::uint32_t i, In&& in, std::vector<std::uint32_t>& out) const {
     const std::uint32_t v = vertices[i];
     for (std::uint32_t f : topology.vertex_faces.row(v))
-      if (lowest_of(topology.triangles[f], v, in) && is_new_fold(f)) out.push_back(f);
+      if (lowest_listed(topology.triangles[f], v, in) && is_new_fold(f)) out.push_back(f);
   }
 
   /// The new folds around every moved vertex, in chunks over `pool` (the one pass every merge

@@ -55,4 +55,22 @@ inline bool flipped_by_a_diff(std::span<const Vec3f> base, std::span<const Diff*
   });
 }
 
+/// A new fold: `t` flipped from the base to the merge (whose normal of `t` is `merged`) and by
+/// no single diff — a crease or spike no artist made. The diffs are searched only for faces
+/// the merge flipped, which are few.
+inline bool is_new_fold(std::span<const Vec3f> base, std::span<const Diff* const> diffs,
+                        const Triangle& t, const Vec3d& merged) {
+  const Vec3d n = base_normal(base, t);
+  return opposed(n, merged) && !flipped_by_a_diff(base, diffs, t, n);
+}
+
+/// Whether `v` is the lowest vertex of `t` that `listed` (a predicate on vertices) holds for:
+/// a face around several listed vertices is visited from each and tested from that one only.
+template <class Listed>
+bool lowest_listed(const Triangle& t, std::uint32_t v, Listed&& listed) {
+  for (std::uint32_t u : t)
+    if (u < v && listed(u)) return false;
+  return true;
+}
+
 }  // namespace csculpt::detail

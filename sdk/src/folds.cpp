@@ -39,19 +39,8 @@ struct MergedView {
   }
 };
 
-/// Flipped by the merge and by no single diff. The diffs are searched only for faces the merge
-/// flipped, which are few.
 bool is_new_fold(const MergedView& m, std::span<const Diff* const> diffs, const Triangle& t) {
-  const Vec3d n = normal_of(m.base, t);
-  return opposed(n, m.normal(t)) && !detail::flipped_by_a_diff(m.base.positions, diffs, t, n);
-}
-
-/// Whether `v` is the lowest vertex of `t` that the merge moved: a face around several moved
-/// vertices is visited from each and counted from that one only.
-bool first_moved_is(const MergedView& m, const Triangle& t, std::uint32_t v) {
-  for (std::uint32_t u : t)
-    if (u < v && m.moved(u)) return false;
-  return true;
+  return detail::is_new_fold(m.base.positions, diffs, t, m.normal(t));
 }
 
 void check_vertex_counts(const Mesh& base, std::span<const Diff* const> diffs, const Diff& merged) {
@@ -88,7 +77,9 @@ std::uint32_t FoldCounter::count_new_folds(const Mesh& base, std::span<const Dif
   for (std::uint32_t v : merged.positions.indices)
     for (std::uint32_t f : topology_->vertex_faces.row(v)) {
       const Triangle& t = base.triangles[f];
-      if (first_moved_is(view, t, v) && is_new_fold(view, diffs, t)) ++folds;
+      if (detail::lowest_listed(t, v, [&](std::uint32_t u) { return view.moved(u); }) &&
+          is_new_fold(view, diffs, t))
+        ++folds;
     }
   mark(slot_, merged, true);  // all kNone again for the next call
   return folds;

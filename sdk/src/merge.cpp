@@ -723,7 +723,6 @@ struct Merger::Workspace {
   std::vector<detail::TransportInput> transport_inputs;
   detail::TransportScratch transport;
   detail::FoldRepairScratch fold_repair;
-  std::vector<const Diff*> ordered;  ///< the diffs in canonical order
   detail::WorkerPool pool;
 };
 
@@ -1055,11 +1054,11 @@ void Merger::Pass::transport_positions() {
 
 void Merger::Pass::repair_folds(std::span<const std::uint32_t> changed, std::span<Vec3f> moved) {
   const auto t0 = Clock::now();
-  ws.ordered.resize(users);
-  for (std::uint32_t u = 0; u < users; ++u) ws.ordered[u] = diffs[order[u]];
-  timings.new_folds_repaired +=
-      detail::repair_new_folds(hierarchy.topology(), base.positions, changed, ws.ordered, moved,
-                               ws.fold_repair, ws.pool, kBlendGrain);
+  std::array<const Diff*, max_merge_diffs> ordered{};
+  for (std::uint32_t u = 0; u < users; ++u) ordered[u] = diffs[order[u]];
+  timings.new_folds_repaired += detail::repair_new_folds(
+      hierarchy.topology(), base.positions, changed, std::span(ordered.data(), users), moved,
+      ws.fold_repair, ws.pool, kBlendGrain);
   timings.fold_repair_ms += ms_since(t0);
 }
 
