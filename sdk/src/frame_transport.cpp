@@ -40,11 +40,12 @@ struct VertexState {
 
 class Transport {
  public:
-  Transport(std::span<const Vec3f> base, std::span<const std::uint32_t> vertices,
+  Transport(const Topology& topology, std::span<const Vec3f> base, std::span<const std::uint32_t> vertices,
             std::span<const TransportInput> users, TransportScratch& scratch)
-      : base_(base), vertices_(vertices), users_(users), scratch_(scratch), n_(users.size()) {}
+      : topology_(topology), base_(base), vertices_(vertices), users_(users), scratch_(scratch), n_(users.size()) {}
 
   void find_seams();
+  void share_normals();
   void chunk_energy(std::size_t begin, std::size_t end, double* energy) const;
   void finish_weights(std::size_t chunks);
   Vec3f merged(std::size_t at) const;
@@ -54,7 +55,10 @@ class Transport {
   void share_rotations(std::uint32_t groups);
   void load(std::size_t at, VertexState& s) const;
   Quat rotation(std::size_t at, std::size_t i) const;
+  Vec3d base_normal(std::uint32_t v) const;
+  Vec3d normal(std::size_t at) const;
 
+  const Topology& topology_;
   std::span<const Vec3f> base_;
   std::span<const std::uint32_t> vertices_;
   std::span<const TransportInput> users_;
@@ -126,11 +130,57 @@ void Transport::share_rotations(std::uint32_t groups) {
   }
 }
 
+/// The part of q that turns the unit vector n (q = swing * twist, twist about n): a detail
+/// follows the turn of the surface's normal, not a spin of the surface about it.
+Quat swing(const Quat& q, const Vec3d& n) {
+  if (is_identity(q)) return q;
+  const double p = q.x * n.x + q.y * n.y + q.z * n.z;
+  const double tw = q.w, tx = p * n.x, ty = p * n.y, tz = p * n.z;
+  const double len = std::sqrt(tw * tw + tx * tx + ty * ty + tz * tz);
+  if (!(len > 1e-12)) return q;
+  const Quat twist{static_cast<float>(tw / len), static_cast<float>(tx / len),
+                   static_cast<float>(ty / len), static_cast<float>(tz / len)};
+  return q * conjugate(twist);
+}
+
 Quat Transport::rotation(std::size_t at, std::size_t i) const {
   const std::uint32_t group = scratch_.seam_of[at];
-  if (group != kNoSeam) return scratch_.seam_rotation[group * n_ + i];
   const std::uint32_t v = vertices_[at];
-  return has(users_[i].rotated, v) ? users_[i].isometry[v].real : Quat{};
+  const Quat q = group != kNoSeam ? scratch_.seam_rotation[group * n_ + i]
+                 : has(users_[i].rotated, v) ? users_[i].isometry[v].real : Quat{};
+  return q;
+}
+
+/// The unit area-weighted normal of v's base faces (zero when it has none).
+Vec3d Transport::base_normal(std::uint32_t v) const {
+  Vec3d sum{};
+  for (std::uint32_t f : topology_.vertex_faces.row(v)) {
+    const Triangle& t = topology_.triangles[f];
+    const Vec3d p0 = widen(base_[t[0]]);
+    sum = add(sum, cross(sub(widen(base_[t[1]]), p0), sub(widen(base_[t[2]]), p0)));
+  }
+  const double len = std::sqrt(norm2(sum));
+  return len > 0 ? scale(sum, 1.0 / len) : Vec3d{};
+}
+
+/// Coincident vertices (split seams) share one normal, the normalised sum of theirs, as
+/// they share one rotation.
+void Transport::share_normals() {
+  const auto& seam_of = scratch_.seam_of;
+  auto& shared = scratch_.seam_normal;
+  shared.assign(scratch_.seam_rotation.size() / std::max<std::size_t>(n_, 1), Vec3d{});
+  for (std::size_t at = 0; at < vertices_.size(); ++at)
+    if (seam_of[at] != kNoSeam)
+      shared[seam_of[at]] = add(shared[seam_of[at]], base_normal(vertices_[at]));
+  for (Vec3d& n : shared) {
+    const double len = std::sqrt(norm2(n));
+    n = len > 0 ? scale(n, 1.0 / len) : Vec3d{};
+  }
+}
+
+Vec3d Transport::normal(std::size_t at) const {
+  const std::uint32_t group = scratch_.seam_of[at];
+  return group != kNoSeam ? scratch_.seam_normal[group] : base_normal(vertices_[at]);
 }
 
 void Transport::load(std::size_t at, VertexState& s) const {
@@ -193,7 +243,8 @@ Vec3f Transport::merged(std::size_t at) const {
   load(at, s);
   const std::uint32_t v = vertices_[at];
   const Vec3f& b = base_[v];
-  Vec3d sum{};
+  Vec3d sum{}, n{};
+  bool have_normal = false;  // computed only where one edit carries another
   for (std::size_t j = 0; j < n_; ++j) {
     if (!s.moves[j]) continue;
     double count = 1;
@@ -203,7 +254,9 @@ Vec3f Transport::merged(std::size_t at) const {
     for (std::size_t i = n_; i-- > 0;) {
       if (i == j || !s.turns[i]) continue;
       const double g = (1.0 - sameness(s, i, j)) * scratch_.weight[i * n_ + j];
-      if (g > 0) carried = add(carried, scale(rotation_change(s.rotation[i], carried), g));
+      if (!(g > 0)) continue;
+      if (!have_normal) n = normal(at), have_normal = true;
+      carried = add(carried, scale(rotation_change(swing(s.rotation[i], n), carried), g));
     }
     sum = add(sum, count == 1 ? carried : scale(carried, 1.0 / count));
   }
@@ -213,11 +266,13 @@ Vec3f Transport::merged(std::size_t at) const {
 
 }  // namespace
 
-void transport_positions(std::span<const Vec3f> base, std::span<const std::uint32_t> vertices,
+void transport_positions(const Topology& topology, std::span<const Vec3f> base,
+                         std::span<const std::uint32_t> vertices,
                          std::span<const TransportInput> users, TransportScratch& scratch,
                          WorkerPool& pool, std::size_t grain, std::span<Vec3f> moved) {
-  Transport t(base, vertices, users, scratch);
+  Transport t(topology, base, vertices, users, scratch);
   t.find_seams();
+  t.share_normals();
   const std::size_t n = users.size();
   const std::size_t chunks = std::max<std::size_t>(1, (vertices.size() + grain - 1) / grain);
   scratch.chunk_energy.resize(chunks * n * n);
