@@ -10,6 +10,10 @@ prints its table, and asserts on `full`:
     frame ideal below both "(sum)" and "(weighted-translation)"; against the stacked ideal
     never worse than 1.5 x "(sum)";
   - new_folds (faces flipped by the merge but by no edit) no more than "(sum)"'s;
+  - every artist scored (artists.py): against the frame ideal, on each artist's own support,
+    full keeps no less of that artist's edit than "(sum)" does (within ARTIST_SLACK, the
+    ideals' own rounding at the rim of a support); on disjoint and identical cases every
+    artist's support within 0.01 of every ideal;
   - roughness <= 1.2 where there is no ideal;
   - every method the scorer ran produced a result.
 KNOWN_LIMITS lists the rule violations that are understood and documented in
@@ -22,11 +26,14 @@ import re
 import subprocess
 import sys
 
+import artists
+
 SKIP = 77
 METHODS = ["full", "hierarchy-blend"]
 EXACT_LIMIT = 0.01
 STACK_FACTOR = 1.5
 ROUGHNESS_LIMIT = 1.2
+ARTIST_SLACK = 0.005
 ROW = re.compile(r"^(\S+)\s+(\S+)\s+(rel_err|roughness|new_folds)=(\S+)$")
 
 # (case, rule) -> why. Rules: "stack", "folds". See docs/merge-quality.md, "Limits".
@@ -94,10 +101,25 @@ def check(results, cases):
     return problems
 
 
-def score(scorer, binary, cases_dir):
+def check_artists(binary, cases_dir, case):
+    """Rule violations of the per-artist scores of one case, as (case, rule, message)."""
+    problems = []
+    exact = "disjoint" in case or "identical" in case
+    for ideal, artist, e in artists.score_case(binary, os.path.join(cases_dir, case)):
+        where = "artist %s against %s" % (artist, ideal)
+        if exact and not e["full"] <= EXACT_LIMIT:
+            problems.append((case, "exact", "%s: full %.4f > %.2f" % (where, e["full"], EXACT_LIMIT)))
+        elif not exact and ideal == "ideal_frame" and not e["full"] <= e["(sum)"] + ARTIST_SLACK:
+            problems.append((case, "artist", "%s: full %.4f keeps less than sum %.4f"
+                             % (where, e["full"], e["(sum)"])))
+    return problems
+
+
+def score(scorer, binary, cases_dir, echo=True):
     run = subprocess.run([sys.executable, scorer, cases_dir, binary] + METHODS,
                          capture_output=True, text=True)
-    sys.stdout.write(run.stdout)
+    if echo:
+        sys.stdout.write(run.stdout)
     if run.returncode != 0:
         sys.stdout.write(run.stderr)
         return None
@@ -124,6 +146,8 @@ def main():
             print("FAIL: the scorer failed on %s" % d)
             return 1
         problems += check(parse(table), here)
+        for case in here:
+            problems += check_artists(binary, d, case)
         cases += here
     known = [p for p in problems if (p[0], p[1]) in KNOWN_LIMITS]
     new = [p for p in problems if (p[0], p[1]) not in KNOWN_LIMITS]

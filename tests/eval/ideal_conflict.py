@@ -1,0 +1,97 @@
+#!/usr/bin/python3
+"""Can any merge meet both ideals' rules at once? An oracle check, no merge involved.
+
+usage: ideal_conflict.py CASES_DIR [CASES_DIR ...]
+
+The rules ask, where a detail and a coarse edit meet: against ideal_frame.ply below "sum",
+and against ideal.ply within 1.5x "sum". Where the two ideals disagree (tapers, casts, grab
+falloffs: a deformer acting on the detail volumetrically), a merge has to pick a point
+between them. This takes the best such point a method could ever produce, knowing both
+ideals: x(a) = (1 - a) * frame + a * stack, and prints, per case, the interval of a for which
+x(a) meets both rules, then the intersection over all cases, then the results off that
+segment, pulled toward "sum" by b, that meet both rules everywhere. An empty intersection means
+that no method whose result lies between the two ideals meets both rules on every case; a
+method must then move toward "sum" and give up part of the frame ideal everywhere the
+deformation is not rigid (docs/merge-quality.md, "Limits")."""
+import os
+import sys
+
+import numpy as np
+
+import artists
+
+STEPS = 100
+
+
+def rel_err(x, ideal, finest):
+    return artists.support_error(x, ideal, finest)
+
+
+def load(case_dir):
+    names = [n for n in artists.ARTISTS if os.path.exists(os.path.join(case_dir, n + ".ply"))]
+    base = artists.read_ply(os.path.join(case_dir, "base.ply"))
+    ds = [artists.read_ply(os.path.join(case_dir, n + ".ply")) - base for n in names]
+    finest = min(ds, key=lambda d: np.sqrt((np.linalg.norm(d, axis=1) ** 2).mean()))
+    stack = artists.read_ply(os.path.join(case_dir, "ideal.ply"))
+    frame = artists.read_ply(os.path.join(case_dir, "ideal_frame.ply"))
+    return finest, stack, frame, base + sum(ds)
+
+
+def passes(x, finest, stack, frame, plain):
+    return (rel_err(x, frame, finest) < rel_err(plain, frame, finest) and
+            rel_err(x, stack, finest) <= 1.5 * rel_err(plain, stack, finest))
+
+
+def toward_sum(cases):
+    """(a, b, worst frame error as a share of sum's) for the results
+    frame + a (stack - frame) + b (sum - frame) that meet both rules on every case."""
+    found = []
+    for a in np.arange(0, 1.001, 0.1):
+        for b in np.arange(0, 1.001, 0.1):
+            ok, share = True, 0.0
+            for finest, stack, frame, plain in cases:
+                x = frame + a * (stack - frame) + b * (plain - frame)
+                if not passes(x, finest, stack, frame, plain):
+                    ok = False
+                    break
+                share = max(share, rel_err(x, frame, finest) / rel_err(plain, frame, finest))
+            if ok:
+                found.append((a, b, share))
+    return found
+
+
+def interval(case_dir):
+    """(lo, hi) of a in [0, 1] meeting both rules, or None; None too when the ideals agree."""
+    finest, stack, frame, plain = load(case_dir)
+    if rel_err(frame, stack, finest) < 0.01:
+        return None
+    ok = [a / STEPS for a in range(STEPS + 1)
+          if passes((1 - a / STEPS) * frame + a / STEPS * stack, finest, stack, frame, plain)]
+    return (min(ok), max(ok)) if ok else (1.0, 0.0)
+
+
+def main():
+    lo, hi = 0.0, 1.0
+    conflicting = []
+    for d in sys.argv[1:]:
+        for case in sorted(os.listdir(d)):
+            path = os.path.join(d, case)
+            if not os.path.exists(os.path.join(path, "ideal_frame.ply")):
+                continue
+            r = interval(path)
+            if r is None:
+                print("%-34s the ideals agree" % case)
+                continue
+            print("%-34s a in [%.2f, %.2f]" % (case, r[0], r[1]))
+            conflicting.append(load(path))
+            lo, hi = max(lo, r[0]), min(hi, r[1])
+    print("every case: " + ("a in [%.2f, %.2f]" % (lo, hi) if lo <= hi else
+                            "no a meets both rules (the ideals conflict)"))
+    print("off the segment, frame + a (stack - frame) + b (sum - frame), meeting both rules on "
+          "every case where the ideals differ (worst frame error as a share of sum's):")
+    for a, b, share in toward_sum(conflicting):
+        print("  a %.1f  b %.1f  %.2f" % (a, b, share))
+
+
+if __name__ == "__main__":
+    main()
