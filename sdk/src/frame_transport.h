@@ -21,8 +21,9 @@
 //   rotations would change the coarser's a lot, so the coarser edit carries the finer one
 //   (for a bump of width w on a bend of radius r the ratio is (r / w)^2). Every term is
 //   bounded by |(R_i - I) d_j|, so the result is continuous even where the weights switch.
-// - s_ij = max(0, 1 - |d_i - d_j| / max(|d_i|, |d_j|))^2 and c_j = sum_k s_jk count each
-//   intent once: identical edits come back once (idempotence), independent ones add.
+// - s_ij = max(0, 1 - |d_i - d_j| / min(|d_i|, |d_j|))^2 and c_j = sum_k s_jk count each
+//   intent once: identical edits come back once (idempotence), independent ones add, and a
+//   small edit inside a large one moving the same way is not taken for a copy of it.
 // - Coincident vertices that are not connected (split seams) share one rotation per diff,
 //   so a seam that the artists moved together stays closed.
 // Products and sums run in the canonical order of the diffs, per vertex in double, and the
