@@ -1,6 +1,8 @@
-// A stroke of the built-in artist (csculpt/testkit/generate.h) from the four values the unit tests
-// vary; the rest keep Stroke's defaults.
+// Strokes of the built-in artist (csculpt/testkit/generate.h) in tests: one from the four values
+// the tests vary (the rest keep Stroke's defaults), and each kind's name for messages.
 #pragma once
+
+#include <string>
 
 #include "csculpt/testkit/generate.h"
 
@@ -13,6 +15,27 @@ inline Stroke stroke(Stroke::Kind kind, Vec3f center, float radius, float streng
   s.radius = radius;
   s.strength = strength;
   return s;
+}
+
+/// "grab", "inflate", ...: the name of the enumerator, for traces and test names.
+inline std::string kind_name(Stroke::Kind kind) {
+  switch (kind) {
+    case Stroke::Kind::grab:
+      return "grab";
+    case Stroke::Kind::inflate:
+      return "inflate";
+    case Stroke::Kind::detail:
+      return "detail";
+    case Stroke::Kind::twist:
+      return "twist";
+    case Stroke::Kind::bend:
+      return "bend";
+    case Stroke::Kind::smooth:
+      return "smooth";
+    case Stroke::Kind::paint:
+      return "paint";
+  }
+  return "?";
 }
 
 }  // namespace csculpt::test
