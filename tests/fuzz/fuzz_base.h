@@ -1,5 +1,5 @@
 // The base mesh the wire fuzzers decode against, shared with the test that writes and checks
-// their seed corpus (tests/wire/test_wire.cpp): the seeds are real messages only for this mesh.
+// their seed corpus (tests/sdk/wire/test_wire.cpp): the seeds are real messages only for this mesh.
 #pragma once
 
 #include <cstdint>

@@ -187,7 +187,7 @@ class Merge(unittest.TestCase):
                                               meshes.bits(s.p[untouched]))
                 errors[method] = (rel_error(result, s.a, s.p, ia), rel_error(result, s.b, s.p,
                                                                               ib))
-        # The paper's merge keeps each region within a few percent (as tests/unit's
+        # The paper's merge keeps each region within a few percent (as tests/sdk/merge's
         # MergeIdentity.DisjointEditsEachKeepTheirRegion asks); per-vertex methods take a
         # lone edit's values as they are.
         self.assertLess(max(errors["full"]), 0.05, errors)

@@ -1,5 +1,5 @@
 // The SDK's two content hashes, one copy each for every layer (SDK, peer, C ABI). Both are
-// pinned by tests/unit/test_digest_pins.cpp: the word hash orders diffs before the merge's
+// pinned by tests/sdk/hash/test_digest_pins.cpp: the word hash orders diffs before the merge's
 // arithmetic (merges stay bit-identical only while it does not change) and FNV-1a gives
 // csc_hierarchy_digest's values, which hosts see.
 #pragma once

@@ -29,7 +29,8 @@ enum class MergeMethod : std::uint32_t {
   weighted_translation = 4,    ///< translations blended per vertex by magnitude (paper eq. 1)
   average = 5,                 ///< mean of the translations
   sum = 6,                     ///< sum of the translations
-  /// `full` with the paper's node blend exactly: normalize(sum_j |q_j - 1| q_j)
+  /// the paper's algorithm as written: isometries, multiscale, K blended parents, residuals
+  /// blended per node by normalize(sum_j |q_j - 1| q_j); channels through the hierarchy too
   paper_blend = 7,
   /// the previous `full`: isometries, multiscale, K blended parents; residuals blended per
   /// node by magnitude and counted once per intent, recomposed coarse to fine

@@ -3,7 +3,7 @@
 // written once over the register width and compiled twice: SSE2 (4 nodes per register, in
 // simd_dispatch.cpp) and AVX2 (8 nodes, in blend_avx2.cpp, used when the CPU has it). Every lane
 // performs the scalar code's IEEE operations in the same order, so both give bit-identical
-// merges and peers with different CPUs agree (tests/unit/test_simd_dispatch.cpp).
+// merges and peers with different CPUs agree (tests/sdk/simd/test_simd_dispatch.cpp).
 #pragma once
 
 #include <cstddef>

@@ -1,6 +1,6 @@
 // Which build of the merge's SIMD kernels runs: AVX2 (blend_avx2.cpp) where it is built
 // and the CPU and OS support it, else the SSE2 baseline compiled here. Both give the same
-// bits (tests/unit/test_simd_dispatch.cpp), so peers on different CPUs merge alike; the
+// bits (tests/sdk/simd/test_simd_dispatch.cpp), so peers on different CPUs merge alike; the
 // environment variable CSCULPT_SIMD=sse2 forces the baseline, e.g. to compare speeds.
 #include <atomic>
 #include <cstdlib>

@@ -32,10 +32,12 @@
 #include "mini_json.h"
 #include "test_meshes.h"
 #include "test_strokes.h"
+#include "test_support.h"
 
 namespace csculpt {
 namespace {
 
+using test::read_file;
 using test::stroke;
 
 namespace fs = std::filesystem;
@@ -44,13 +46,6 @@ std::string quote(const std::string& s) {
   std::string q = "'";
   for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
   return q + "'";
-}
-
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 std::vector<std::string> lines_of(const std::string& text) {
@@ -73,20 +68,12 @@ struct Result {
   std::string out, err;
 };
 
-/// A fresh directory under testing::TempDir() per test, removed afterwards.
+/// Each test in a fresh directory of its own (test::TestDir), removed afterwards.
 class Cli : public ::testing::Test {
  protected:
   void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::path(::testing::TempDir()) / ("csculpt_cli_" + std::to_string(::getpid()) + "_" +
-                                             info->test_suite_name() + "_" + info->name());
-    fs::remove_all(dir_);
     fs::create_directories(dir_ / "out");
     ASSERT_TRUE(fs::exists(CSCULPT_CLI)) << CSCULPT_CLI;
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
   }
 
   /// Runs `csculpt ARGS` (ARGS already quoted where needed), stdin from /dev/null.
@@ -113,7 +100,8 @@ class Cli : public ::testing::Test {
     return p;
   }
 
-  fs::path dir_;
+  test::TestDir scratch_{"csculpt_cli"};
+  const fs::path dir_ = scratch_.path();
   int runs_ = 0;
 };
 

@@ -1,7 +1,6 @@
 // Mesh file reading and writing: the real and malformed files of assimp-testmodels, every PLY
 // encoding and scalar type, OBJ/OFF/STL variants, error messages, and atomic writes.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <bit>
@@ -14,7 +13,6 @@
 #include <iostream>
 #include <limits>
 #include <map>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -41,25 +39,9 @@ bool contains(const std::string& s, const std::string& part) {
   return s.find(part) != std::string::npos;
 }
 
-std::string read_bytes(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream out;
-  out << in.rdbuf();
-  return out.str();
-}
-
-// A temporary directory per test, removed afterwards.
+// Each test in a fresh directory of its own (test::TestDir), removed afterwards.
 class IoFiles : public ::testing::Test {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           (std::string("csculpt_io_") + info->name() + "_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
   std::vector<std::string> listing() const {
     std::vector<std::string> names;
@@ -72,7 +54,8 @@ class IoFiles : public ::testing::Test {
     std::ofstream(dir_ / name, std::ios::binary) << bytes;
   }
 
-  fs::path dir_;
+  test::TestDir scratch_{"csculpt_io"};
+  const fs::path dir_ = scratch_.path();
 };
 
 // ------------------------------------------------------------------------------------------
@@ -726,7 +709,7 @@ TEST_F(IoFiles, PlyRoundTripIsBitExact) {
 
   // Layout the external scorer relies on: little endian, only float scalars in the vertex
   // element, the face list in the face element.
-  const std::string bytes = read_bytes(dir_ / "s.ply");
+  const std::string bytes = test::read_file(dir_ / "s.ply");
   const std::string header = bytes.substr(0, bytes.find("end_header\n"));
   EXPECT_TRUE(starts_with(header, "ply\nformat binary_little_endian 1.0\n"));
   const std::string vertex_part = header.substr(
@@ -753,7 +736,7 @@ TEST_F(IoFiles, AsciiPlyWithChannelsRoundTrips) {
 
 TEST_F(IoFiles, TruncatedBinaryPly) {
   write_mesh(test::make_icosphere(1), path("s.ply"));
-  const std::string bytes = read_bytes(dir_ / "s.ply");
+  const std::string bytes = test::read_file(dir_ / "s.ply");
   EXPECT_EQ(invalid_input_message([&] { parse_ply(bytes.substr(0, bytes.size() - 5), "x.ply"); }),
             "x.ply: truncated binary data in element face (face 79 of 80)");
   const std::size_t body = bytes.find("end_header\n") + 11;

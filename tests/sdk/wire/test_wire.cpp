@@ -34,6 +34,7 @@
 #include "diff_generated.h"
 #include "diff_next_generated.h"
 #include "fuzz_base.h"
+#include "test_strokes.h"
 #include "test_support.h"
 
 namespace csculpt {
@@ -460,16 +461,7 @@ class WireSize : public ::testing::TestWithParam<Stroke::Kind> {
 Mesh* WireSize::base_ = nullptr;
 
 std::string kind_test_name(const ::testing::TestParamInfo<Stroke::Kind>& param) {
-  switch (param.param) {
-    case Stroke::Kind::grab:
-      return "grab";
-    case Stroke::Kind::inflate:
-      return "inflate";
-    case Stroke::Kind::detail:
-      return "detail";
-    default:
-      return "twist";
-  }
+  return test::kind_name(param.param);
 }
 
 TEST_P(WireSize, TenThousandVertexStrokeFitsInSixtyKilobytes) {

@@ -278,10 +278,7 @@ TEST(GenerateStroke, ADegenerateRadiusIsRefusedOrHarmless) {
   for (auto kind : {Stroke::Kind::grab, Stroke::Kind::inflate, Stroke::Kind::detail,
                     Stroke::Kind::twist, Stroke::Kind::bend, Stroke::Kind::paint}) {
     for (float radius : {0.f, -0.5f}) {
-      static const char* const names[] = {"grab", "inflate", "detail", "twist",
-                                          "bend", "smooth",  "paint"};
-      SCOPED_TRACE(std::string(names[static_cast<int>(kind)]) + " of radius " +
-                   std::to_string(radius));
+      SCOPED_TRACE(test::kind_name(kind) + " of radius " + std::to_string(radius));
       Mesh m = base;
       try {
         apply_stroke(m, stroke(kind, base.positions[0], radius, 0.5f));

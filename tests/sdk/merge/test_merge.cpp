@@ -27,10 +27,12 @@
 #include "csculpt/testkit/scenarios.h"
 #include "csculpt/vec3.h"
 #include "test_meshes.h"
+#include "test_strokes.h"
 #include "test_support.h"
 
 namespace csculpt {
 using csculpt::test::invalid_input_message;
+using csculpt::test::kind_name;
 
 namespace {
 
@@ -40,25 +42,6 @@ using Kind = Stroke::Kind;
 constexpr std::array<Kind, 7> kKinds = {Kind::grab, Kind::inflate, Kind::detail, Kind::twist,
                                         Kind::bend, Kind::smooth,  Kind::paint};
 
-std::string kind_name(Kind k) {
-  switch (k) {
-    case Kind::grab:
-      return "grab";
-    case Kind::inflate:
-      return "inflate";
-    case Kind::detail:
-      return "detail";
-    case Kind::twist:
-      return "twist";
-    case Kind::bend:
-      return "bend";
-    case Kind::smooth:
-      return "smooth";
-    case Kind::paint:
-      return "paint";
-  }
-  return "?";
-}
 std::string method_name(MergeMethod m) {
   return std::string(to_string(m));
 }
