@@ -1,5 +1,5 @@
 # Builds merge cases from edits authored by Blender's own deformers.
-# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held]
+# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2]
 # (Debian 12: apt-get install blender assimp-testmodels). Add your own case() lines to author more.
 # public, public2: the sets of shared/eval/cases (this file began as shared/eval/make_cases.py);
 # held: tests/eval/cases (see its README.md), which also prints what each case holds;
@@ -376,7 +376,7 @@ def case(name, kind, edits, ideal=None, details=None):
         edits[0](o); write_ply(os.path.join(d, "ideal.ply"), evaluated_verts(o), faces)
     o.modifiers.clear()
     print("CASE", name, len(base), "vertices", len(faces), "faces")
-    if which != "held": return
+    if which not in ("held", "held2"): return
     # what the case holds, for the README: parts, split seams, each edit's size and folds
     rep = coincident(base)
     files = dict(zip("abcdefgh", edited)); files.update(results)
@@ -521,6 +521,32 @@ elif which == "public2":
          [lambda o: detail(o, (0.4, 0, 0.9), 0.3, 0.05, 26),
           lambda o: detail(o, (-0.4, 0, -0.9), 0.3, 0.05, 27),
           lambda o: twist(o, math.radians(70), 'Z')], "stack")
+elif which == "held2":
+    # authored after the swing and sameness rules, on pairings none of the cases above has:
+    # sideways details under a grab, a twist, a taper and a stretch; a Cast over an as-shipped
+    # many-part mesh; a grab over a detail on a 24-part mesh; three artists on a torus
+    case("grab_plus_swirl_capsule", "capsule_lo",
+         [lambda o: local_twist(o, (0, 0.4, 0.3), (0, 1, 0), 0.3, math.radians(70)),
+          lambda o: grab(o, (0, 0.4, 0.4), (0.1, 0.7, 0.6), 0.8)], "stack", details=[0])
+    case("twist_plus_tinygrab_monkey", "monkey2",
+         [lambda o: tiny_grab(o, near(o, (0, -0.8, 0.4))[0], (0.03, 0, 0.02), 0.2),
+          lambda o: twist(o, math.radians(50), 'Z')], "stack", details=[0])
+    case("taper_plus_pinch_capsule", "capsule_lo",
+         [lambda o: pinch(o, (0.4, 0, 0.5), 0.25, 0.6),
+          lambda o: simple(o, 'TAPER', 0.6, 'Z')], "stack", details=[0])
+    case("stretch_plus_tinygrab_torus", "torus_lo",
+         [lambda o: tiny_grab(o, (1.3, 0, 0), (0, 0.03, 0.02), 0.25),
+          lambda o: simple(o, 'STRETCH', 0.3, 'X')], "stack", details=[0])
+    case("cast_plus_detail_spider_shipped", "spider_shipped",
+         [lambda o: detail_along(o, at("+y"), 0.3, 0.05, 50, 'Y'),
+          lambda o: cast(o, 0.4)], "stack", details=[0])
+    case("grab_plus_detail_mocap", "mocap",
+         [lambda o: detail(o, at("+x"), 0.3, 0.04, 51),
+          lambda o: grab(o, at("+x"), at("+x", 1, (0.15, 0.05, 0.1)), 0.7)], "stack", details=[0])
+    case("three_artists_torus", "torus_lo",
+         [lambda o: detail(o, (1, 0, 0.3), 0.3, 0.05, 53),
+          lambda o: local_twist(o, (-1.3, 0, 0), (-1, 0, 0), 0.3, math.radians(60)),
+          lambda o: simple(o, 'TWIST', math.radians(45), 'X')], "stack", details=[0, 1])
 elif which == "probe":
     for kind in sys.argv[sys.argv.index("--") + 3:]:
         o = base_object(kind); base, faces = snapshot(o); rep = coincident(base)
