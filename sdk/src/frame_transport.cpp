@@ -40,9 +40,15 @@ struct VertexState {
 
 class Transport {
  public:
-  Transport(const Topology& topology, std::span<const Vec3f> base, std::span<const std::uint32_t> vertices,
-            std::span<const TransportInput> users, TransportScratch& scratch)
-      : topology_(topology), base_(base), vertices_(vertices), users_(users), scratch_(scratch), n_(users.size()) {}
+  Transport(const Topology& topology, std::span<const Vec3f> base,
+            std::span<const std::uint32_t> vertices, std::span<const TransportInput> users,
+            TransportScratch& scratch)
+      : topology_(topology),
+        base_(base),
+        vertices_(vertices),
+        users_(users),
+        scratch_(scratch),
+        n_(users.size()) {}
 
   void find_seams();
   void share_normals();
@@ -145,10 +151,9 @@ Quat swing(const Quat& q, const Vec3d& n) {
 
 Quat Transport::rotation(std::size_t at, std::size_t i) const {
   const std::uint32_t group = scratch_.seam_of[at];
+  if (group != kNoSeam) return scratch_.seam_rotation[group * n_ + i];
   const std::uint32_t v = vertices_[at];
-  const Quat q = group != kNoSeam ? scratch_.seam_rotation[group * n_ + i]
-                 : has(users_[i].rotated, v) ? users_[i].isometry[v].real : Quat{};
-  return q;
+  return has(users_[i].rotated, v) ? users_[i].isometry[v].real : Quat{};
 }
 
 /// The unit area-weighted normal of v's base faces (zero when it has none).

@@ -1044,8 +1044,9 @@ void Merger::Pass::transport_positions() {
     ws.transport_inputs[u] = {level0.values.data(), level0.bits.data(), ws.lookups[u].slot.data(),
                               ws.lookups[u].changed.words.data(), positions_of(u).values.data()};
   }
-  detail::transport_positions(hierarchy.topology(), base.positions, changed_union, ws.transport_inputs, ws.transport,
-                              ws.pool, kBlendGrain, std::span(ws.moved.data(), n_changed));
+  detail::transport_positions(hierarchy.topology(), base.positions, changed_union,
+                              ws.transport_inputs, ws.transport, ws.pool, kBlendGrain,
+                              std::span(ws.moved.data(), n_changed));
   for (std::uint32_t u = 0; u < users; ++u) ws.lookups[u].changed.clear(positions_of(u).indices);
   repair_folds(changed_union, std::span(ws.moved.data(), n_changed));
   ws.pool.for_chunks(n_changed, kBlendGrain,
