@@ -240,7 +240,9 @@ bool App::frame() {
     ready_printed_ = true;
   }
   if (glfwWindowShouldClose(window_)) return false;
-  const bool replay_done = !replay_.loaded() || replay_.finished();
+  // A replay holds the exit back until it has run, unless it waits for a session that failed.
+  const bool session_failed = replay_.waiting_for_session() && !session_.active() && !session_.joining();
+  const bool replay_done = !replay_.loaded() || replay_.finished() || session_failed;
   return !(options_.exit_after_seconds && replay_done && glfwGetTime() - start_time_ >= *options_.exit_after_seconds);
 }
 

@@ -39,6 +39,7 @@ class App final : public InputHandlers {
   void on_key(int key, int action, int mods) override;
   void on_scroll(double dy) override;
   void on_pressure(float pressure) override { pressure_ = pressure; }
+  bool in_session() const override { return session_.active(); }
 
  private:
   enum class Drag { none, stroke, orbit, pan };

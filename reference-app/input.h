@@ -10,4 +10,6 @@ struct InputHandlers {
   virtual void on_scroll(double dy) = 0;
   /** Pen pressure 0..1 (GLFW 3.3 has none; the replay and a future XInput2 path set it). */
   virtual void on_pressure(float pressure) = 0;
+  /** For the replay's `wait session`: true once this app holds a session's mesh. */
+  virtual bool in_session() const = 0;
 };

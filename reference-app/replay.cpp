@@ -75,8 +75,15 @@ bool ReplayPlayer::load(const std::string& path, std::string& error) {
       e.kind = Kind::scroll;
       ok = static_cast<bool>(words >> e.y);
     } else if (verb == "wait") {
-      e.kind = Kind::wait;
-      ok = static_cast<bool>(words >> e.code) && e.code >= 1;
+      std::string what;
+      words >> what;
+      if (what == "session") {
+        e.kind = Kind::wait_session;
+      } else {
+        e.kind = Kind::wait;
+        std::istringstream count(what);
+        ok = static_cast<bool>(count >> e.code) && e.code >= 1;
+      }
     } else {
       ok = false;
     }
@@ -93,6 +100,8 @@ bool ReplayPlayer::load(const std::string& path, std::string& error) {
 }
 
 void ReplayPlayer::step(InputHandlers& input) {
+  if (waiting_for_session_ && !input.in_session()) return;
+  waiting_for_session_ = false;
   if (waiting_ > 0 && --waiting_ > 0) return;
   while (next_ < events_.size()) {
     const Event& e = events_[next_++];
@@ -109,6 +118,7 @@ void ReplayPlayer::step(InputHandlers& input) {
       case Kind::pressure: input.on_pressure(static_cast<float>(e.x)); break;
       case Kind::scroll: input.on_scroll(e.y); break;
       case Kind::wait: waiting_ = e.code; return;
+      case Kind::wait_session: waiting_for_session_ = true; return;
     }
   }
 }

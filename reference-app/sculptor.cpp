@@ -184,7 +184,7 @@ void Sculptor::apply(const DabInput& input, const BrushSettings& settings, glm::
         break;
       }
       case BrushKind::flatten:  // invert pushes away from the plane (contrast)
-        p -= area_normal * (glm::dot(p - area_center, area_normal) * sign * std::min(1.f, 0.5f * s * w));
+        p -= area_normal * (glm::dot(p - area_center, area_normal) * sign * std::min(1.f, s * w));
         break;
       case BrushKind::crease:  // a sharp groove (or ridge when inverted) that pinches its walls in
         p += -area_normal * (sign * depth * w * w) + toward_centre(0.5f * kPinchRate);
