@@ -95,7 +95,7 @@ bool App::open_window() {
 }
 
 void App::report(const std::string& message) {
-  error_ = message;
+  error_ = error_.empty() ? message : error_ + "\n" + message;  // keep earlier messages in view
   std::fprintf(stderr, "csculpt-app: %s\n", message.c_str());
 }
 
