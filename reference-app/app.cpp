@@ -145,6 +145,13 @@ void App::join_session(const std::string& invite) {
   session_.begin_join(invite);
 }
 
+// The session's attribution colours (who edited where) drawn in place of the albedo.
+void App::toggle_attribution_view() {
+  attribution_view_ = !attribution_view_;
+  attribution_dirty_ = true;
+  if (!attribution_view_) renderer_.upload_all(document_);
+}
+
 void App::sync_after_session_write() {
   // csc_session_update and _submit write the host's arrays in place without saying which
   // vertices changed (an ABI gap): compare with what was last drawn.
@@ -225,7 +232,8 @@ bool App::frame() {
   glfwPollEvents();
   if (replay_.active()) replay_.step(*this);
   session_tick();
-  if (attribution_view_ && attribution_dirty_ && session_.active()) {
+  if (attribution_view_ && !session_.active()) toggle_attribution_view();  // left: real colours back
+  if (attribution_view_ && attribution_dirty_) {
     if (session_.attribution_colours(attribution_rgb_, document_.vertex_count()))
       renderer_.upload_colour_override(attribution_rgb_);
     attribution_dirty_ = false;

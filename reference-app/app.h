@@ -58,6 +58,7 @@ class App final : public InputHandlers {
   void host_session();
   void join_session(const std::string& invite);
   void report(const std::string& message);
+  void toggle_attribution_view();
   void finish();
   // app_input.cpp
   bool over_panel(double x, double y) const;

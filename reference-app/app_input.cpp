@@ -197,6 +197,7 @@ bool App::shortcut(int key, int mods) {
       brush_.falloff = static_cast<Falloff>(key - GLFW_KEY_F1);
       break;
     case GLFW_KEY_TAB: show_ui_ = !show_ui_; break;
+    case GLFW_KEY_A: toggle_attribution_view(); break;
     default: return false;
   }
   return true;

@@ -124,7 +124,8 @@ void App::draw_tool_panel() {
         "D draw  G grab  I inflate  S smooth  L flatten  C crease  P pinch  T twist\n"
         "B paint colour  R roughness  M metallic\n"
         "[ ] radius  - = strength  F1-F5 falloff  E invert  V front faces  X Y Z symmetry\n"
-        "1 3 7 front/side/top  F flat  W wireframe  Tab hide panels  Ctrl+Z / Ctrl+Shift+Z");
+        "1 3 7 front/side/top  F flat  W wireframe  A attribution (session)  Tab hide panels\n"
+        "Ctrl+Z / Ctrl+Shift+Z undo / redo (solo)");
   }
   ImGui::Text("%.1f fps", ImGui::GetIO().Framerate);
   panel_rects_.push_back({ImGui::GetWindowPos().x, ImGui::GetWindowPos().y, ImGui::GetWindowSize().x,
@@ -161,10 +162,8 @@ void App::draw_session_panel() {
                 static_cast<unsigned long long>(stats.merges), stats.merge_ms_mean);
     for (const SessionLink::Peer& peer : session_.peers())
       ImGui::BulletText("%016llx  %s", static_cast<unsigned long long>(peer.id), peer_state_name(peer.state));
-    if (ImGui::Checkbox("Attribution view", &attribution_view_)) {
-      attribution_dirty_ = true;
-      if (!attribution_view_) renderer_.upload_all(document_);
-    }
+    bool attribution = attribution_view_;
+    if (ImGui::Checkbox("Attribution view (A)", &attribution)) toggle_attribution_view();
   }
   for (const std::string& message : session_.messages()) ImGui::TextWrapped("- %s", message.c_str());
   panel_rects_.push_back({ImGui::GetWindowPos().x, ImGui::GetWindowPos().y, ImGui::GetWindowSize().x,

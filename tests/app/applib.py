@@ -36,6 +36,10 @@ class Replay:
         self.lines.append(f"wait {what}")
         return self
 
+    def pressure(self, value):
+        self.lines.append(f"pressure {value}")
+        return self
+
     def drag(self, start, end, steps=16, button="left", mods=()):
         """A drag from start to end in `steps` cursor events, one per frame."""
         (x0, y0), (x1, y1) = start, end

@@ -161,6 +161,14 @@ class Brushes(unittest.TestCase):
         sharp = self.sculpt(Replay().key("d").key("f4").drag(*ACROSS))
         self.assertGreater(total(constant), 1.5 * total(sharp))
 
+    def test_pen_pressure_scales_strength(self):
+        def total(mesh):
+            return sum(mesh.radius(v) - 1.0 for v in moved_vertices(self.base, mesh))
+        light = self.sculpt(Replay().key("d").pressure(0.2).drag(*ACROSS))
+        full = self.sculpt(Replay().key("d").pressure(1).drag(*ACROSS))
+        self.assertGreater(total(light), 0.0)
+        self.assertLess(total(light), 0.5 * total(full))
+
     def test_replay_is_deterministic(self):
         first = self.sculpt(Replay().key("d").drag(*ACROSS))
         second = self.sculpt(Replay().key("d").drag(*ACROSS))
