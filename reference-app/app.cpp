@@ -270,6 +270,15 @@ void App::finish() {
     if (!write_screenshot(options_.screenshot_path, width, height, error)) report(error);
   }
   if (!options_.save_path.empty() && !document_.save(options_.save_path, error)) report(error);
+  if (session_.active()) {  // for scripts: where this peer's session stood when it quit
+    const csc_session_stats& stats = session_.stats();
+    std::printf("SESSION id=%016llx merger=%016llx version=%llu members=%u submitted=%llu acknowledged=%llu\n",
+                static_cast<unsigned long long>(session_.id()), static_cast<unsigned long long>(stats.merger),
+                static_cast<unsigned long long>(session_.version()), stats.members,
+                static_cast<unsigned long long>(stats.strokes_submitted),
+                static_cast<unsigned long long>(stats.strokes_acknowledged));
+    std::fflush(stdout);
+  }
   session_.leave();
 }
 

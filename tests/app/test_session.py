@@ -1,10 +1,13 @@
 """Two csculpt-app processes in one session through the C ABI: one hosts (and prints its
 invite), the other joins with it; each replays a stroke over the same region (a draw across,
 a paint and an inflate down), both save on exit. They must end with the same mesh bit for bit,
-holding both artists' strokes."""
+holding both artists' strokes. And when the hosting app is killed, the other carries on: it
+becomes the merger and its strokes are merged."""
 import os
+import signal
 import subprocess
 import sys
+import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(__file__))
@@ -43,6 +46,35 @@ class TwoApps(unittest.TestCase):
         self.assertTrue(any(abs(before.position(v)[1]) > 0.3 for v in moved))
         painted = changed_in(before, after, "albedo_r")  # the joiner's paint
         self.assertGreater(len(painted), 50)
+
+
+    def test_joiner_carries_on_when_the_host_is_killed(self):
+        directory = temp_dir(self)
+        host = subprocess.Popen([APP, *TEST_SPHERE, "--host"], stdout=subprocess.PIPE,
+                                stderr=subprocess.DEVNULL, text=True)
+        self.addCleanup(lambda: host.poll() is None and host.kill())
+        self.addCleanup(host.stdout.close)
+        invite = host.stdout.readline().strip().split(" ", 1)[1]
+        # The joiner strokes once while the host merges, is left alone (SIGKILL: no goodbye),
+        # and strokes again after the re-election (expiry is 1.2 s).
+        replay = (Replay().wait("session").key("d").drag((590, 400), (690, 400)).wait(40)
+                  .drag((590, 330), (690, 330)).wait(60).drag((590, 470), (690, 470)))
+        joiner = subprocess.Popen([APP, "--join", invite, "--replay", replay.write(directory),
+                                   "--exit-after", "10"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        self.addCleanup(lambda: joiner.poll() is None and joiner.kill())
+        self.assertEqual(joiner.stdout.readline().strip(), "READY")
+        time.sleep(2.5)
+        host.send_signal(signal.SIGKILL)
+        out, err = joiner.communicate(timeout=90)
+        self.assertEqual(joiner.returncode, 0, err)
+        session = dict(word.split("=") for word in next(
+            line for line in out.splitlines() if line.startswith("SESSION ")).split()[1:])
+        # Ids are random, so the joiner merged before the kill in about half the runs; in the
+        # others this is the re-election. Either way it is alone and merges.
+        self.assertEqual(session["members"], "1", out)
+        self.assertEqual(session["merger"], session["id"], out)
+        self.assertEqual(session["submitted"], "3", out)
+        self.assertEqual(session["acknowledged"], "3", out)  # every stroke merged, the last by itself
 
 
 if __name__ == "__main__":
