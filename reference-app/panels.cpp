@@ -147,11 +147,12 @@ void App::draw_session_panel() {
     ImGui::SameLine();
     if (ImGui::Button("Join")) join_session(join_text_.data());
   } else {
+    // The buttons first, where "Host a session" was: the invite's length never moves them.
     const csc_session_stats& stats = session_.stats();
-    ImGui::TextWrapped("Invite: %.40s...", session_.invite());
     if (ImGui::Button("Copy invite")) glfwSetClipboardString(window_, session_.invite());
     ImGui::SameLine();
     if (ImGui::Button("Leave")) session_.leave();
+    ImGui::TextWrapped("Invite: %.40s...", session_.invite());
     ImGui::Text("me %016llx", static_cast<unsigned long long>(session_.id()));
     ImGui::Text("merger %016llx%s", static_cast<unsigned long long>(stats.merger),
                 stats.merger == session_.id() ? " (me)" : "");
