@@ -26,14 +26,20 @@ int App::run_bench() {
   std::vector<double> frame_ms;
   frame_ms.reserve(frames);
   dab_ms_.reserve(size_t{frames} * 16);
+  // In a session (--host / --join) the merged versions applied during the phase are counted:
+  // the frames then include csc_session_update's rebase of the artist's arrays.
+  uint64_t versions_before = session_.stats().versions_applied;
   auto print = [&](const char* mode) {
-    const double p50 = percentile(frame_ms, 0.5), p99 = percentile(frame_ms, 0.99);
+    const double p50 = percentile(frame_ms, 0.5), p99 = percentile(frame_ms, 0.99), worst = percentile(frame_ms, 1.0);
+    const csc_session_stats& stats = session_.stats();
     std::printf("{\"bench\":\"app_frames\",\"mode\":\"%s\",\"faces\":%u,\"vertices\":%u,\"width\":%d,"
-                "\"height\":%d,\"frames\":%u,\"frame_ms_p50\":%.3f,\"frame_ms_p99\":%.3f,"
-                "\"fps_p50\":%.2f,\"fps_p99\":%.2f}\n",
-                mode, document_.triangle_count(), document_.vertex_count(), width, height, frames, p50, p99,
-                1000.0 / p50, 1000.0 / p99);
+                "\"height\":%d,\"frames\":%u,\"frame_ms_p50\":%.3f,\"frame_ms_p99\":%.3f,\"frame_ms_max\":%.3f,"
+                "\"fps_p50\":%.2f,\"fps_p99\":%.2f,\"session_members\":%u,\"versions_applied\":%llu}\n",
+                mode, document_.triangle_count(), document_.vertex_count(), width, height, frames, p50, p99, worst,
+                1000.0 / p50, 1000.0 / p99, session_.active() ? stats.members : 0u,
+                static_cast<unsigned long long>(stats.versions_applied - versions_before));
     std::fflush(stdout);
+    versions_before = stats.versions_applied;
   };
   auto timed_frame = [&] {
     const auto start = std::chrono::steady_clock::now();
@@ -41,7 +47,9 @@ int App::run_bench() {
     glFinish();  // count the frame's drawing, not only its submission
     frame_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
   };
-  for (int warm = 0; warm < 5; ++warm) frame();
+  const double warm_until = glfwGetTime() + options_.bench_warmup_seconds;
+  for (int warm = 0; warm < 5 || glfwGetTime() < warm_until; ++warm) frame();
+  versions_before = session_.stats().versions_applied;
   for (uint32_t i = 0; i < frames; ++i) timed_frame();
   print("idle");
 

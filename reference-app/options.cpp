@@ -8,7 +8,7 @@ namespace {
 constexpr const char* kUsage =
     "usage: csculpt-app [MESH] [--host | --join INVITE] [--replay FILE] [--save PATH]\n"
     "                   [--screenshot PATH] [--exit-after SECONDS] [--bench-frames N]\n"
-    "                   [--sphere-faces N] [--size WxH]\n"
+    "                   [--bench-warmup S] [--sphere-faces N] [--size WxH]\n"
     "  MESH            a .ply/.obj/.off/.stl file; without it, a built-in sphere\n"
     "  --host          host a session; prints `INVITE <invite>` on stdout\n"
     "  --join INVITE   join the session of INVITE\n"
@@ -17,6 +17,7 @@ constexpr const char* kUsage =
     "  --screenshot P  write a PNG of the window on exit\n"
     "  --exit-after S  quit after S seconds (never before a --replay has ended)\n"
     "  --bench-frames N  print frame-time JSON lines (idle, sculpting) and quit\n"
+    "  --bench-warmup S  run S seconds of untimed frames before the benchmark\n"
     "  --sphere-faces N  faces of the built-in sphere (default 160000)\n"
     "  --size WxH      window size (default 1280x800)\n";
 
@@ -63,6 +64,9 @@ ParseResult parse_options(int argc, char** argv) {
     } else if (arg == "--bench-frames") {
       if (!value(v) || !parse_number(v, options.bench_frames) || options.bench_frames == 0)
         return fail("--bench-frames needs a positive count");
+    } else if (arg == "--bench-warmup") {
+      if (!value(v) || !parse_number(v, options.bench_warmup_seconds) || options.bench_warmup_seconds < 0)
+        return fail("--bench-warmup needs a number of seconds");
     } else if (arg == "--sphere-faces") {
       if (!value(v) || !parse_number(v, options.sphere_faces) || options.sphere_faces < 20)
         return fail("--sphere-faces needs a count of at least 20");
