@@ -1,0 +1,306 @@
+#include "app.h"
+
+#include <epoxy/gl.h>
+#include <backends/imgui_impl_glfw.h>
+#include <backends/imgui_impl_opengl3.h>
+#include <imgui.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include "screenshot.h"
+
+namespace {
+
+struct MeshDeleter {
+  void operator()(csc_mesh* mesh) const { csc_mesh_destroy(mesh); }
+};
+
+App* app_of(GLFWwindow* window) { return static_cast<App*>(glfwGetWindowUserPointer(window)); }
+
+// GLFW callbacks: ImGui sees every event first (its 1.86 backend is not installed with
+// callbacks of its own), then the app decides.
+void cursor_callback(GLFWwindow* window, double x, double y) { app_of(window)->on_cursor(x, y); }
+void button_callback(GLFWwindow* window, int button, int action, int mods) {
+  ImGui_ImplGlfw_MouseButtonCallback(window, button, action, mods);
+  app_of(window)->on_button(button, action, mods);
+}
+void key_callback(GLFWwindow* window, int key, int scancode, int action, int mods) {
+  ImGui_ImplGlfw_KeyCallback(window, key, scancode, action, mods);
+  app_of(window)->on_key(key, action, mods);
+}
+void char_callback(GLFWwindow* window, unsigned int c) { ImGui_ImplGlfw_CharCallback(window, c); }
+void scroll_callback(GLFWwindow* window, double dx, double dy) {
+  ImGui_ImplGlfw_ScrollCallback(window, dx, dy);
+  app_of(window)->on_scroll(dy);
+}
+void error_callback(int code, const char* description) {
+  std::fprintf(stderr, "csculpt-app: GLFW error %d: %s\n", code, description);
+}
+
+}  // namespace
+
+int run_app(const AppOptions& options) {
+  if (csc_version() / 10000 != CSC_VERSION_MAJOR || csc_version() < CSC_VERSION_NUMBER) {
+    std::fprintf(stderr, "csculpt-app: built for libcsculpt %s, loaded %s\n", CSC_VERSION_STRING,
+                 csc_version_string());
+    return 1;
+  }
+  App app(options);
+  return app.run();
+}
+
+App::~App() {
+  if (imgui_ready_) {
+    ImGui_ImplOpenGL3_Shutdown();
+    ImGui_ImplGlfw_Shutdown();
+    ImGui::DestroyContext();
+  }
+  if (window_) {
+    renderer_.release();  // its GL objects need the context: free them while it exists
+    glfwDestroyWindow(window_);
+  }
+  glfwTerminate();
+}
+
+bool App::open_window() {
+  glfwSetErrorCallback(error_callback);
+  if (!glfwInit()) return false;
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+  window_ = glfwCreateWindow(options_.width, options_.height, "cSculpt", nullptr, nullptr);
+  if (!window_) return false;
+  glfwMakeContextCurrent(window_);
+  glfwSwapInterval(options_.bench_frames > 0 ? 0 : 1);
+  glfwSetWindowUserPointer(window_, this);
+
+  IMGUI_CHECKVERSION();
+  ImGui::CreateContext();
+  ImGuiIO& io = ImGui::GetIO();
+  io.IniFilename = nullptr;  // the same layout on every run (tests compare pictures)
+  ImGui::StyleColorsDark();
+  ImGui_ImplGlfw_InitForOpenGL(window_, false);
+  ImGui_ImplOpenGL3_Init("#version 330 core");
+  imgui_ready_ = true;
+  glfwSetCursorPosCallback(window_, cursor_callback);
+  glfwSetMouseButtonCallback(window_, button_callback);
+  glfwSetKeyCallback(window_, key_callback);
+  glfwSetCharCallback(window_, char_callback);
+  glfwSetScrollCallback(window_, scroll_callback);
+  return true;
+}
+
+void App::report(const std::string& message) {
+  error_ = error_.empty() ? message : error_ + "\n" + message;  // keep earlier messages in view
+  std::fprintf(stderr, "csculpt-app: %s\n", message.c_str());
+}
+
+void App::open_start_mesh() {
+  std::string error;
+  if (!options_.mesh_path.empty() && document_.load(options_.mesh_path, error)) return;
+  document_.make_sphere(options_.sphere_faces);
+  if (!error.empty()) report(error + " (showing the built-in sphere)");
+}
+
+// After the document got new arrays (open, join): everything derived from them is rebuilt.
+void App::layout_changed() {
+  bvh_.build(document_.positions, document_.triangles);
+  sculptor_.reset();
+  history_.reset(document_);
+  renderer_.upload_all(document_);
+  shadow_positions_ = document_.positions;
+  shadow_channels_.clear();
+  for (const MeshChannel& channel : document_.channels) shadow_channels_.push_back(channel.values);
+  // Frame the mesh: its bounding box's centre and half diagonal.
+  glm::vec3 lo(INFINITY), hi(-INFINITY);
+  for (size_t i = 0; i < document_.positions.size(); i += 3)
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::fmin(lo[a], document_.positions[i + a]);
+      hi[a] = std::fmax(hi[a], document_.positions[i + a]);
+    }
+  const glm::vec3 extent = hi - lo;
+  camera_.frame((lo + hi) * 0.5f, 0.5f * std::sqrt(extent.x * extent.x + extent.y * extent.y + extent.z * extent.z));
+  std::snprintf(path_text_.data(), path_text_.size(), "%s", "");
+  attribution_dirty_ = true;
+}
+
+void App::host_session() {
+  std::string error;
+  std::unique_ptr<csc_mesh, MeshDeleter> mesh(document_.to_csc_mesh(error));
+  if (!mesh || !session_.host(mesh.get(), error)) {
+    report(error);
+    return;
+  }
+  history_.reset(document_);  // undo of solo strokes would fight the session's versions
+  std::printf("INVITE %s\n", session_.invite());
+  std::fflush(stdout);
+}
+
+void App::join_session(const std::string& invite) {
+  if (drag_ == Drag::stroke) end_stroke();
+  session_.begin_join(invite);
+}
+
+// The session's attribution colours (who edited where) drawn in place of the albedo.
+void App::toggle_attribution_view() {
+  attribution_view_ = !attribution_view_;
+  attribution_dirty_ = true;
+  if (!attribution_view_) renderer_.upload_all(document_);
+}
+
+void App::sync_after_session_write() {
+  // csc_session_update and _submit write the host's arrays in place without saying which
+  // vertices changed (an ABI gap): compare with what was last drawn.
+  session_changed_.clear();
+  bool moved = false;
+  const uint32_t vertex_count = document_.vertex_count();
+  for (uint32_t v = 0; v < vertex_count; ++v) {
+    bool changed = false;
+    for (int c = 0; c < 3; ++c)
+      if (document_.positions[3 * size_t{v} + c] != shadow_positions_[3 * size_t{v} + c]) changed = moved = true;
+    for (size_t ch = 0; ch < document_.channels.size() && !changed; ++ch) {
+      const MeshChannel& channel = document_.channels[ch];
+      for (uint32_t c = 0; c < channel.width; ++c)
+        if (channel.values[size_t{v} * channel.width + c] != shadow_channels_[ch][size_t{v} * channel.width + c])
+          changed = true;
+    }
+    if (changed) session_changed_.push_back(v);
+  }
+  for (uint32_t v : session_changed_) {
+    std::copy_n(&document_.positions[3 * size_t{v}], 3, &shadow_positions_[3 * size_t{v}]);
+    for (size_t ch = 0; ch < document_.channels.size(); ++ch) {
+      const uint32_t w = document_.channels[ch].width;
+      std::copy_n(&document_.channels[ch].values[size_t{v} * w], w, &shadow_channels_[ch][size_t{v} * w]);
+    }
+  }
+  sculptor_.refresh_after_change(session_changed_, moved);
+}
+
+void App::session_tick() {
+  if (session_.joining()) {
+    std::string error;
+    const int joined = session_.poll_join(error);
+    if (joined < 0) report(error);
+    if (joined > 0) {
+      std::unique_ptr<csc_mesh, MeshDeleter> base(session_.copy_base(error));
+      if (!base || !document_.adopt(base.get(), "session mesh", error)) {
+        report(error);
+        session_.leave();
+      } else {
+        layout_changed();
+      }
+    }
+  }
+  if (!session_.active()) return;
+  session_.poll_events();
+  if (drag_ == Drag::stroke) return;  // remote versions land between strokes, never inside one
+  csc_vertex_arrays local = document_.vertex_arrays();
+  bool written = false;
+  if (session_.version_pending() && session_.update(local) > 0) written = attribution_dirty_ = true;
+  if (strokes_since_submit_ > 0 || session_.resubmit_due()) {
+    session_.submit(local, strokes_since_submit_);
+    strokes_since_submit_ = 0;
+    written = true;  // submit quantises the local edit to what the peers receive
+  }
+  if (written) sync_after_session_write();
+}
+
+void App::render(bool with_ui) {
+  int width = 0, height = 0;
+  glfwGetFramebufferSize(window_, &width, &height);
+  glViewport(0, 0, width, height);
+  glClearColor(0.16f, 0.17f, 0.19f, 1.f);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  if (width > 0 && height > 0)
+    renderer_.draw(camera_.view(), camera_.projection(float(width) / float(height)), view_);
+  panel_rects_.clear();
+  if (!with_ui) return;
+  ImGui_ImplOpenGL3_NewFrame();
+  ImGui_ImplGlfw_NewFrame();
+  ImGui::NewFrame();
+  draw_panels();
+  ImGui::Render();
+  ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+}
+
+// One frame: input, replay, session, uploads, drawing. False when the app should quit.
+bool App::frame() {
+  glfwPollEvents();
+  if (replay_.active()) replay_.step(*this);
+  session_tick();
+  if (attribution_view_ && !session_.active()) toggle_attribution_view();  // left: real colours back
+  if (attribution_view_ && attribution_dirty_) {
+    if (session_.attribution_colours(attribution_rgb_, document_.vertex_count()))
+      renderer_.upload_colour_override(attribution_rgb_);
+    attribution_dirty_ = false;
+  }
+  renderer_.upload_vertices(document_, sculptor_.dirty_vertices());
+  sculptor_.clear_dirty();
+  render(show_ui_);
+  glfwSwapBuffers(window_);
+  if (!ready_printed_) {
+    std::puts("READY");
+    std::fflush(stdout);
+    ready_printed_ = true;
+  }
+  if (glfwWindowShouldClose(window_)) return false;
+  // A replay holds the exit back until it has run, unless it waits for a session that failed.
+  const bool session_failed = replay_.waiting_for_session() && !session_.active() && !session_.joining();
+  const bool replay_done = !replay_.loaded() || replay_.finished() || session_failed;
+  return !(options_.exit_after_seconds && replay_done && glfwGetTime() - start_time_ >= *options_.exit_after_seconds);
+}
+
+// On exit: the last versions in, then the screenshot and the save (issue 11's contract).
+void App::finish() {
+  if (drag_ == Drag::stroke) end_stroke();
+  if (session_.active()) {
+    session_tick();
+    renderer_.upload_vertices(document_, sculptor_.dirty_vertices());
+    sculptor_.clear_dirty();
+  }
+  std::string error;
+  if (!options_.screenshot_path.empty()) {
+    render(show_ui_);
+    int width = 0, height = 0;
+    glfwGetFramebufferSize(window_, &width, &height);
+    if (!write_screenshot(options_.screenshot_path, width, height, error)) report(error);
+  }
+  if (!options_.save_path.empty() && !document_.save(options_.save_path, error)) report(error);
+  if (session_.active()) {  // for scripts: where this peer's session stood when it quit
+    const csc_session_stats& stats = session_.stats();
+    std::printf("SESSION id=%016llx merger=%016llx version=%llu members=%u submitted=%llu acknowledged=%llu\n",
+                static_cast<unsigned long long>(session_.id()), static_cast<unsigned long long>(stats.merger),
+                static_cast<unsigned long long>(session_.version()), stats.members,
+                static_cast<unsigned long long>(stats.strokes_submitted),
+                static_cast<unsigned long long>(stats.strokes_acknowledged));
+    std::fflush(stdout);
+  }
+  session_.leave();
+}
+
+int App::run() {
+  if (!open_window()) {
+    std::fprintf(stderr, "csculpt-app: cannot open an OpenGL 3.3 window (is there a display?)\n");
+    return 1;
+  }
+  std::string error;
+  if (!renderer_.init(error)) {
+    std::fprintf(stderr, "csculpt-app: %s\n", error.c_str());
+    return 1;
+  }
+  open_start_mesh();
+  layout_changed();
+  if (!options_.replay_path.empty() && !replay_.load(options_.replay_path, error)) report(error);
+  if (options_.host) host_session();
+  if (!options_.join_invite.empty()) join_session(options_.join_invite);
+  if (options_.bench_frames > 0) return run_bench();
+  start_time_ = glfwGetTime();
+  while (frame()) {
+  }
+  finish();
+  return 0;
+}

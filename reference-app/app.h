@@ -1,0 +1,126 @@
+// The app: a GLFW window with the mesh document, the brushes, the panels and a session.
+// app.cpp: start-up, the main loop, rendering and the session's per-frame work;
+// app_input.cpp: mouse and keys (strokes, camera, shortcuts); panels.cpp: the ImGui panels;
+// bench.cpp: --bench-frames.
+#pragma once
+
+#include <GLFW/glfw3.h>
+#include <glm/vec3.hpp>
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "brush.h"
+#include "bvh.h"
+#include "camera.h"
+#include "input.h"
+#include "mesh_document.h"
+#include "options.h"
+#include "renderer.h"
+#include "replay.h"
+#include "sculptor.h"
+#include "session_link.h"
+#include "stroke_history.h"
+
+int run_app(const AppOptions& options);
+
+class App final : public InputHandlers {
+ public:
+  explicit App(const AppOptions& options) : options_(options) {}
+  App(const App&) = delete;
+  App& operator=(const App&) = delete;
+  ~App() override;
+  int run();
+
+  // InputHandlers (app_input.cpp): GLFW's callbacks and the replay call these.
+  void on_cursor(double x, double y) override;
+  void on_button(int button, int action, int mods) override;
+  void on_key(int key, int action, int mods) override;
+  void on_scroll(double dy) override;
+  void on_pressure(float pressure) override { pressure_ = pressure; }
+  bool in_session() const override { return session_.active(); }
+
+ private:
+  enum class Drag { none, stroke, orbit, pan };
+  struct Rect {
+    float x, y, w, h;
+  };
+
+  // app.cpp
+  bool open_window();
+  void open_start_mesh();
+  void layout_changed();
+  bool frame();
+  void render(bool with_ui);
+  void session_tick();
+  void sync_after_session_write();
+  void host_session();
+  void join_session(const std::string& invite);
+  void report(const std::string& message);
+  void toggle_attribution_view();
+  void finish();
+  // app_input.cpp
+  bool over_panel(double x, double y) const;
+  bool pick(double x, double y, RayHit& hit) const;
+  DabInput dab_input(const RayHit& hit) const;
+  void begin_stroke(int mods);
+  void continue_stroke();
+  void end_stroke();
+  void undo();
+  void redo();
+  bool shortcut(int key, int mods);
+  // panels.cpp
+  void draw_panels();
+  void draw_tool_panel();
+  void draw_session_panel();
+  void draw_brush_cursor();
+  // bench.cpp
+  int run_bench();
+
+  AppOptions options_;
+  GLFWwindow* window_ = nullptr;
+  bool imgui_ready_ = false;
+  MeshDocument document_;
+  TriangleBvh bvh_;
+  StrokeHistory history_;
+  Sculptor sculptor_{document_, bvh_, history_};
+  Renderer renderer_;
+  OrbitCamera camera_;
+  BrushSettings brush_;
+  ViewSettings view_;
+  ReplayPlayer replay_;
+  SessionLink session_;
+
+  // Input state. The press uses the position of the last cursor event, never a live
+  // glfwGetCursorPos (which races with a fast xdotool drag: see the Debian notes).
+  double cursor_x_ = 0, cursor_y_ = 0;
+  double drag_x_ = 0, drag_y_ = 0;  // the last position the drag consumed
+  float pressure_ = 1.f;
+  Drag drag_ = Drag::none;
+  BrushKind stroke_kind_ = BrushKind::draw;
+  bool stroke_invert_ = false;
+  glm::vec3 grab_anchor_{0.f};
+  uint32_t strokes_since_submit_ = 0;
+
+  // Panels.
+  std::vector<Rect> panel_rects_;  // last frame's panels: clicks there are not strokes
+  bool show_ui_ = true;
+  bool attribution_view_ = false, attribution_dirty_ = false;
+  std::vector<float> attribution_rgb_;
+  std::string error_;
+  std::array<char, 4096> join_text_{};
+  std::array<char, 1024> path_text_{};
+  std::string shown_message_;
+
+  // Session shadow: the values last drawn, to find what csc_session_update/submit changed.
+  std::vector<float> shadow_positions_;
+  std::vector<std::vector<float>> shadow_channels_;
+  std::vector<uint32_t> session_changed_, undo_changed_;
+
+  // Timing.
+  double start_time_ = 0;
+  bool ready_printed_ = false;
+  std::vector<double> dab_ms_;  // filled while benchmarking
+  bool benchmarking_ = false;
+};

@@ -1,0 +1,164 @@
+#include "bvh.h"
+
+#include <algorithm>
+#include <cmath>
+#include <glm/geometric.hpp>
+#include <limits>
+
+namespace {
+
+constexpr uint32_t kLeafSize = 4;
+constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
+
+glm::vec3 vertex(const std::vector<float>& positions, uint32_t v) {
+  return {positions[3 * size_t{v}], positions[3 * size_t{v} + 1], positions[3 * size_t{v} + 2]};
+}
+
+// Slab test: the entry distance of the ray into the box, or infinity.
+float box_entry(glm::vec3 lo, glm::vec3 hi, glm::vec3 origin, glm::vec3 inverse_direction, float best) {
+  float t0 = 0.f, t1 = best;
+  for (int a = 0; a < 3; ++a) {
+    float near = (lo[a] - origin[a]) * inverse_direction[a];
+    float far = (hi[a] - origin[a]) * inverse_direction[a];
+    if (near > far) std::swap(near, far);
+    t0 = std::max(t0, near);
+    t1 = std::min(t1, far);
+    if (t0 > t1) return std::numeric_limits<float>::infinity();
+  }
+  return t0;
+}
+
+}  // namespace
+
+void TriangleBvh::build(const std::vector<float>& positions, const std::vector<uint32_t>& triangles) {
+  const uint32_t count = static_cast<uint32_t>(triangles.size() / 3);
+  nodes_.clear();
+  nodes_.reserve(2 * count / kLeafSize + 1);
+  parent_.clear();
+  order_.resize(count);
+  leaf_of_triangle_.assign(count, 0);
+  std::vector<glm::vec3> centroids(count);
+  for (uint32_t t = 0; t < count; ++t) {
+    order_[t] = t;
+    centroids[t] = (vertex(positions, triangles[3 * t]) + vertex(positions, triangles[3 * t + 1]) +
+                    vertex(positions, triangles[3 * t + 2])) / 3.f;
+  }
+  if (count > 0) build_node(positions, triangles, centroids, 0, count, kNone);
+  refit_stamp_.assign(nodes_.size(), 0);
+  refit_epoch_ = 0;
+}
+
+uint32_t TriangleBvh::build_node(const std::vector<float>& positions, const std::vector<uint32_t>& triangles,
+                                 std::vector<glm::vec3>& centroids, uint32_t begin, uint32_t end,
+                                 uint32_t parent) {
+  const uint32_t index = static_cast<uint32_t>(nodes_.size());
+  nodes_.emplace_back();
+  parent_.push_back(parent);
+  if (end - begin <= kLeafSize) {
+    nodes_[index].first = begin;
+    nodes_[index].count = end - begin;
+    for (uint32_t i = begin; i < end; ++i) leaf_of_triangle_[order_[i]] = index;
+    fit_leaf(nodes_[index], positions, triangles);
+    return index;
+  }
+  // Median split of the centroids along their widest axis: balanced, and cheap to build.
+  glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+  for (uint32_t i = begin; i < end; ++i) {
+    lo = glm::min(lo, centroids[order_[i]]);
+    hi = glm::max(hi, centroids[order_[i]]);
+  }
+  const glm::vec3 extent = hi - lo;
+  const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
+  const uint32_t middle = begin + (end - begin) / 2;
+  std::nth_element(order_.begin() + begin, order_.begin() + middle, order_.begin() + end,
+                   [&](uint32_t a, uint32_t b) { return centroids[a][axis] < centroids[b][axis]; });
+  build_node(positions, triangles, centroids, begin, middle, index);
+  const uint32_t right = build_node(positions, triangles, centroids, middle, end, index);
+  Node& node = nodes_[index];
+  node.first = right;
+  node.count = 0;
+  node.lo = glm::min(nodes_[index + 1].lo, nodes_[right].lo);
+  node.hi = glm::max(nodes_[index + 1].hi, nodes_[right].hi);
+  return index;
+}
+
+void TriangleBvh::fit_leaf(Node& node, const std::vector<float>& positions,
+                           const std::vector<uint32_t>& triangles) const {
+  node.lo = glm::vec3(std::numeric_limits<float>::max());
+  node.hi = glm::vec3(-std::numeric_limits<float>::max());
+  for (uint32_t i = node.first; i < node.first + node.count; ++i)
+    for (int c = 0; c < 3; ++c) {
+      const glm::vec3 p = vertex(positions, triangles[3 * size_t{order_[i]} + c]);
+      node.lo = glm::min(node.lo, p);
+      node.hi = glm::max(node.hi, p);
+    }
+}
+
+void TriangleBvh::refit(const std::vector<float>& positions, const std::vector<uint32_t>& triangles,
+                        std::span<const uint32_t> changed_triangles) {
+  if (++refit_epoch_ == 0) {  // the stamps wrapped: clear them once every 2^32 refits
+    std::fill(refit_stamp_.begin(), refit_stamp_.end(), 0);
+    refit_epoch_ = 1;
+  }
+  refit_nodes_.clear();
+  for (uint32_t t : changed_triangles)
+    for (uint32_t n = leaf_of_triangle_[t]; n != kNone && refit_stamp_[n] != refit_epoch_; n = parent_[n]) {
+      refit_stamp_[n] = refit_epoch_;
+      refit_nodes_.push_back(n);
+    }
+  // Children have larger indices than their parent: refitting in decreasing order visits
+  // every child before its parent.
+  std::sort(refit_nodes_.begin(), refit_nodes_.end(), std::greater<>());
+  for (uint32_t n : refit_nodes_) {
+    Node& node = nodes_[n];
+    if (node.count > 0) {
+      fit_leaf(node, positions, triangles);
+    } else {
+      node.lo = glm::min(nodes_[n + 1].lo, nodes_[node.first].lo);
+      node.hi = glm::max(nodes_[n + 1].hi, nodes_[node.first].hi);
+    }
+  }
+}
+
+RayHit TriangleBvh::raycast(const std::vector<float>& positions, const std::vector<uint32_t>& triangles,
+                            glm::vec3 origin, glm::vec3 direction) const {
+  RayHit best;
+  best.distance = std::numeric_limits<float>::max();
+  if (nodes_.empty()) return best;
+  const glm::vec3 inverse = 1.f / direction;
+  stack_.clear();
+  stack_.push_back(0);
+  while (!stack_.empty()) {
+    const uint32_t index = stack_.back();
+    stack_.pop_back();
+    const Node& node = nodes_[index];
+    if (box_entry(node.lo, node.hi, origin, inverse, best.distance) >= best.distance) continue;
+    if (node.count == 0) {
+      stack_.push_back(node.first);
+      stack_.push_back(index + 1);
+      continue;
+    }
+    for (uint32_t i = node.first; i < node.first + node.count; ++i) {
+      // Möller–Trumbore ray/triangle intersection.
+      const uint32_t t = order_[i];
+      const glm::vec3 a = vertex(positions, triangles[3 * size_t{t}]);
+      const glm::vec3 e1 = vertex(positions, triangles[3 * size_t{t} + 1]) - a;
+      const glm::vec3 e2 = vertex(positions, triangles[3 * size_t{t} + 2]) - a;
+      const glm::vec3 p = glm::cross(direction, e2);
+      const float det = glm::dot(e1, p);
+      if (std::abs(det) < 1e-12f) continue;
+      const float inv_det = 1.f / det;
+      const glm::vec3 s = origin - a;
+      const float u = glm::dot(s, p) * inv_det;
+      if (u < 0.f || u > 1.f) continue;
+      const glm::vec3 q = glm::cross(s, e1);
+      const float v = glm::dot(direction, q) * inv_det;
+      if (v < 0.f || u + v > 1.f) continue;
+      const float distance = glm::dot(e2, q) * inv_det;
+      if (distance > 0.f && distance < best.distance) {
+        best = {true, distance, t, origin + direction * distance};
+      }
+    }
+  }
+  return best;
+}

@@ -1,0 +1,67 @@
+// The mesh the artist edits: the host's own arrays (positions, triangles, every channel of
+// the file, in the csc_mesh's channel order), its topology and normals. The C ABI copies in
+// and out of these arrays (csc_mesh_create, csc_vertex_arrays); the brushes edit them in place.
+#pragma once
+
+#include <csculpt.h>
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+struct MeshChannel {
+  std::string name;
+  uint32_t width = 1;
+  csc_linearisation linearisation = CSC_LINEARISATION_IDENTITY;
+  float min_value = 0.f, max_value = 1.f;
+  std::vector<float> values;  // vertex_count * width
+};
+
+class MeshDocument {
+ public:
+  /** Reads a file through csc_mesh_read and adds the material channels it lacks. On failure
+   *  the document is unchanged and `error` says why. */
+  bool load(const std::string& path, std::string& error);
+  /** Replaces the document with the built-in geodesic sphere (with material channels). */
+  void make_sphere(uint32_t target_faces);
+  /** Copies a mesh's arrays in as they are (no channel added: a session's layout is fixed). */
+  bool adopt(const csc_mesh* mesh, const std::string& label, std::string& error);
+  /** A new csc_mesh of the current arrays (caller destroys), or NULL with `error`. */
+  csc_mesh* to_csc_mesh(std::string& error) const;
+  /** PLY with every channel, or OBJ with positions (csc_mesh_write). */
+  bool save(const std::string& path, std::string& error) const;
+
+  /** Views of the arrays for csc_diff_capture_arrays / csc_session_*; valid until the
+   *  document's layout changes (load, make_sphere, adopt). */
+  csc_vertex_arrays vertex_arrays();
+
+  uint32_t vertex_count() const { return static_cast<uint32_t>(positions.size() / 3); }
+  uint32_t triangle_count() const { return static_cast<uint32_t>(triangles.size() / 3); }
+  /** Floats per vertex over positions and every channel (the undo record's stride). */
+  uint32_t values_per_vertex() const;
+  void copy_vertex_values(uint32_t vertex, float* out) const;
+  void set_vertex_values(uint32_t vertex, const float* in);
+
+  /** Recomputes the normals of `vertices` (area-weighted face normals, summed in a fixed
+   *  order so equal positions give bit-identical normals: an undone stroke redraws the same). */
+  void recompute_normals(std::span<const uint32_t> vertices);
+  void recompute_all_normals();
+
+  std::vector<float> positions;
+  std::vector<uint32_t> triangles;
+  std::vector<MeshChannel> channels;
+  std::vector<float> normals;
+  int albedo = -1, metallic = -1, roughness = -1;  // channel indices
+  std::string label;  // file name or "built-in sphere"
+
+  // Topology (compressed rows): the triangles around each vertex and its neighbours.
+  std::vector<uint32_t> vertex_triangle_offsets, vertex_triangles;
+  std::vector<uint32_t> neighbour_offsets, neighbours;
+
+ private:
+  void build_topology();
+  void find_material_channels();
+  void finish_layout();
+  std::vector<float*> channel_pointers_;
+};

@@ -1,0 +1,211 @@
+#include "renderer.h"
+
+#include <algorithm>
+#include <glm/gtc/type_ptr.hpp>
+
+namespace {
+
+// Merge runs of changed vertices separated by fewer unchanged ones than this: one larger
+// glBufferSubData is cheaper than many tiny ones.
+constexpr uint32_t kRunGap = 32;
+
+constexpr const char* kVertexShader = R"(#version 330 core
+layout(location = 0) in vec3 a_position;
+layout(location = 1) in vec3 a_normal;
+layout(location = 2) in vec3 a_albedo;
+layout(location = 3) in float a_roughness;
+layout(location = 4) in float a_metallic;
+uniform mat4 u_view;
+uniform mat4 u_projection;
+out vec3 v_position;
+out vec3 v_normal;
+out vec3 v_albedo;
+out float v_roughness;
+out float v_metallic;
+void main() {
+  vec4 p = u_view * vec4(a_position, 1.0);
+  v_position = p.xyz;
+  v_normal = mat3(u_view) * a_normal;
+  v_albedo = a_albedo;
+  v_roughness = a_roughness;
+  v_metallic = a_metallic;
+  gl_Position = u_projection * p;
+}
+)";
+
+// A small PBR-style preview: Lambert diffuse for the albedo a metal lacks, Blinn-Phong
+// specular whose sharpness follows roughness (alpha = roughness^2), tinted by metallic, under
+// a key, a fill and a head light.
+constexpr const char* kFragmentShader = R"(#version 330 core
+in vec3 v_position;
+in vec3 v_normal;
+in vec3 v_albedo;
+in float v_roughness;
+in float v_metallic;
+uniform bool u_flat;
+uniform bool u_wire;
+out vec4 frag_colour;
+vec3 light(vec3 n, vec3 v, vec3 l, vec3 colour, vec3 diffuse, vec3 f0, float shininess) {
+  float nl = max(dot(n, l), 0.0);
+  vec3 h = normalize(l + v);
+  float spec = pow(max(dot(n, h), 0.0), shininess) * (shininess + 8.0) / 25.0;
+  return colour * nl * (diffuse + f0 * spec);
+}
+void main() {
+  if (u_wire) { frag_colour = vec4(0.08, 0.08, 0.1, 1.0); return; }
+  vec3 n = u_flat ? normalize(cross(dFdx(v_position), dFdy(v_position))) : normalize(v_normal);
+  vec3 v = normalize(-v_position);
+  if (dot(n, v) < 0.0) n = -n;
+  vec3 albedo = pow(clamp(v_albedo, 0.0, 1.0), vec3(2.2));
+  float alpha = max(v_roughness * v_roughness, 0.02);
+  float shininess = 2.0 / (alpha * alpha) - 2.0;
+  vec3 f0 = mix(vec3(0.04), albedo, v_metallic);
+  vec3 diffuse = albedo * (1.0 - v_metallic);
+  vec3 c = vec3(0.10) * diffuse + vec3(0.06) * f0;
+  c += light(n, v, normalize(vec3(0.5, 0.7, 0.6)), vec3(0.9), diffuse, f0, shininess);
+  c += light(n, v, normalize(vec3(-0.7, 0.1, 0.4)), vec3(0.35, 0.38, 0.45), diffuse, f0, shininess);
+  c += light(n, v, vec3(0.0, 0.0, 1.0), vec3(0.25), diffuse, f0, shininess);
+  frag_colour = vec4(pow(c, vec3(1.0 / 2.2)), 1.0);
+}
+)";
+
+bool compile(GLuint shader, const char* source, std::string& error) {
+  glShaderSource(shader, 1, &source, nullptr);
+  glCompileShader(shader);
+  GLint ok = 0;
+  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+  if (ok) return true;
+  char log[2048];
+  glGetShaderInfoLog(shader, sizeof log, nullptr, log);
+  error = std::string("shader: ") + log;
+  return false;
+}
+
+}  // namespace
+
+void Renderer::release() {
+  if (!program_) return;
+  glDeleteBuffers(kAttributeCount, buffers_);
+  glDeleteBuffers(1, &index_buffer_);
+  glDeleteVertexArrays(1, &vao_);
+  glDeleteProgram(program_);
+  program_ = 0;
+  index_count_ = 0;
+}
+
+bool Renderer::init(std::string& error) {
+  const GLuint vs = glCreateShader(GL_VERTEX_SHADER), fs = glCreateShader(GL_FRAGMENT_SHADER);
+  const bool compiled = compile(vs, kVertexShader, error) && compile(fs, kFragmentShader, error);
+  if (compiled) {
+    program_ = glCreateProgram();
+    glAttachShader(program_, vs);
+    glAttachShader(program_, fs);
+    glLinkProgram(program_);
+  }
+  glDeleteShader(vs);
+  glDeleteShader(fs);
+  if (!compiled) return false;
+  u_view_ = glGetUniformLocation(program_, "u_view");
+  u_projection_ = glGetUniformLocation(program_, "u_projection");
+  u_flat_ = glGetUniformLocation(program_, "u_flat");
+  u_wire_ = glGetUniformLocation(program_, "u_wire");
+  glGenVertexArrays(1, &vao_);
+  glGenBuffers(kAttributeCount, buffers_);
+  glGenBuffers(1, &index_buffer_);
+  glBindVertexArray(vao_);
+  const GLint widths[kAttributeCount] = {3, 3, 3, 1, 1};
+  for (GLuint a = 0; a < kAttributeCount; ++a) {
+    glBindBuffer(GL_ARRAY_BUFFER, buffers_[a]);
+    glVertexAttribPointer(a, widths[a], GL_FLOAT, GL_FALSE, 0, nullptr);
+    glEnableVertexAttribArray(a);
+  }
+  glBindVertexArray(0);
+  return true;
+}
+
+void Renderer::upload_all(const MeshDocument& document) {
+  vertex_count_ = document.vertex_count();
+  constant_.assign(size_t{vertex_count_} * 3, 0.5f);
+  auto channel_data = [&](int index) {
+    return index >= 0 ? document.channels[index].values.data() : constant_.data();
+  };
+  const float* data[kAttributeCount] = {document.positions.data(), document.normals.data(),
+                                        channel_data(document.albedo), channel_data(document.roughness),
+                                        channel_data(document.metallic)};
+  const size_t widths[kAttributeCount] = {3, 3, 3, 1, 1};
+  for (int a = 0; a < kAttributeCount; ++a) {
+    glBindBuffer(GL_ARRAY_BUFFER, buffers_[a]);
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertex_count_ * widths[a] * sizeof(float)), data[a],
+                 GL_DYNAMIC_DRAW);
+  }
+  glBindVertexArray(vao_);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, index_buffer_);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(document.triangles.size() * sizeof(uint32_t)),
+               document.triangles.data(), GL_STATIC_DRAW);
+  glBindVertexArray(0);
+  index_count_ = static_cast<GLsizei>(document.triangles.size());
+  uploaded_last_ = vertex_count_;
+}
+
+void Renderer::upload_range(const MeshDocument& document, uint32_t first, uint32_t count) {
+  auto upload = [&](int attribute, const float* values, size_t width) {
+    if (!values) return;
+    glBindBuffer(GL_ARRAY_BUFFER, buffers_[attribute]);
+    glBufferSubData(GL_ARRAY_BUFFER, static_cast<GLintptr>(first * width * sizeof(float)),
+                    static_cast<GLsizeiptr>(count * width * sizeof(float)), values + first * width);
+  };
+  auto channel = [&](int index) { return index >= 0 ? document.channels[index].values.data() : nullptr; };
+  upload(kPosition, document.positions.data(), 3);
+  upload(kNormal, document.normals.data(), 3);
+  upload(kAlbedo, channel(document.albedo), 3);
+  upload(kRoughness, channel(document.roughness), 1);
+  upload(kMetallic, channel(document.metallic), 1);
+}
+
+void Renderer::upload_vertices(const MeshDocument& document, std::vector<uint32_t>& vertices) {
+  uploaded_last_ = 0;
+  if (vertices.empty()) return;
+  std::sort(vertices.begin(), vertices.end());
+  uint32_t first = vertices[0], last = vertices[0];
+  for (size_t i = 1; i <= vertices.size(); ++i) {
+    if (i < vertices.size() && vertices[i] - last <= kRunGap) {
+      last = vertices[i];
+      continue;
+    }
+    upload_range(document, first, last - first + 1);
+    uploaded_last_ += last - first + 1;
+    if (i < vertices.size()) first = last = vertices[i];
+  }
+}
+
+void Renderer::upload_colour_override(std::span<const float> rgb) {
+  glBindBuffer(GL_ARRAY_BUFFER, buffers_[kAlbedo]);
+  glBufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(rgb.size() * sizeof(float)), rgb.data());
+}
+
+void Renderer::draw(const glm::mat4& view, const glm::mat4& projection, const ViewSettings& settings) {
+  if (index_count_ == 0) return;
+  glEnable(GL_DEPTH_TEST);
+  if (settings.backface_culling) glEnable(GL_CULL_FACE); else glDisable(GL_CULL_FACE);
+  glCullFace(GL_BACK);
+  glUseProgram(program_);
+  glUniformMatrix4fv(u_view_, 1, GL_FALSE, glm::value_ptr(view));
+  glUniformMatrix4fv(u_projection_, 1, GL_FALSE, glm::value_ptr(projection));
+  glUniform1i(u_flat_, settings.flat_shading);
+  glUniform1i(u_wire_, 0);
+  glBindVertexArray(vao_);
+  if (settings.wireframe) {  // push the fill back so the lines drawn over it win the depth test
+    glEnable(GL_POLYGON_OFFSET_FILL);
+    glPolygonOffset(1.f, 1.f);
+  }
+  glDrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
+  if (settings.wireframe) {
+    glDisable(GL_POLYGON_OFFSET_FILL);
+    glUniform1i(u_wire_, 1);
+    glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
+    glDrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
+    glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+  }
+  glBindVertexArray(0);
+  glUseProgram(0);
+}

@@ -1,0 +1,49 @@
+// OpenGL 3.3 core drawing of the mesh: one buffer per attribute (position, normal, albedo,
+// roughness, metallic) so a brush re-uploads only the changed vertices of what it changed.
+#pragma once
+
+#include <epoxy/gl.h>
+#include <glm/mat4x4.hpp>
+
+#include <span>
+#include <string>
+#include <vector>
+
+#include "mesh_document.h"
+
+struct ViewSettings {
+  bool flat_shading = false;
+  bool wireframe = false;
+  bool backface_culling = true;
+};
+
+class Renderer {
+ public:
+  Renderer() = default;
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+  ~Renderer() { release(); }
+  /** Deletes the GL objects (the context must be current). */
+  void release();
+
+  bool init(std::string& error);
+  /** Uploads the whole mesh (after the layout changed). */
+  void upload_all(const MeshDocument& document);
+  /** Uploads `vertices` (sorted here, in place) as a few contiguous glBufferSubData runs. */
+  void upload_vertices(const MeshDocument& document, std::vector<uint32_t>& vertices);
+  /** Replaces the drawn colours (e.g. the attribution view) without touching the document. */
+  void upload_colour_override(std::span<const float> rgb);
+  void draw(const glm::mat4& view, const glm::mat4& projection, const ViewSettings& settings);
+  uint32_t uploaded_vertices_last() const { return uploaded_last_; }
+
+ private:
+  enum Attribute { kPosition, kNormal, kAlbedo, kRoughness, kMetallic, kAttributeCount };
+  void upload_range(const MeshDocument& document, uint32_t first, uint32_t count);
+
+  GLuint program_ = 0, vao_ = 0, index_buffer_ = 0;
+  GLuint buffers_[kAttributeCount] = {};
+  GLint u_view_ = -1, u_projection_ = -1, u_flat_ = -1, u_wire_ = -1;
+  GLsizei index_count_ = 0;
+  uint32_t vertex_count_ = 0, uploaded_last_ = 0;
+  std::vector<float> constant_;  // fill for a material channel the mesh lacks
+};

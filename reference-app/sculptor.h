@@ -1,0 +1,78 @@
+// The brushes: one dab changes the vertices within the brush's world radius of the hit point,
+// weighted by the falloff, mirrored across the enabled symmetry planes. After each change the
+// normals of the touched region are recomputed and the BVH refitted, and the vertices whose
+// drawn values changed are queued for the renderer's partial upload.
+#pragma once
+
+#include <glm/vec3.hpp>
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "brush.h"
+#include "bvh.h"
+#include "mesh_document.h"
+#include "stroke_history.h"
+
+struct DabInput {
+  glm::vec3 center;          // the hit point
+  glm::vec3 view_direction;  // from the eye towards the hit point
+  float radius;              // world units
+  float strength;            // 0..1, pressure applied
+  bool invert;
+  BrushKind kind;  // the brush in effect (Shift selects smooth)
+};
+
+class Sculptor {
+ public:
+  Sculptor(MeshDocument& document, TriangleBvh& bvh, StrokeHistory& history)
+      : document_(document), bvh_(bvh), history_(history) {}
+  /** Sizes the per-vertex scratch after the document's layout changed. */
+  void reset();
+
+  void dab(const DabInput& input, const BrushSettings& settings);
+  /** Grab: the region under the press follows the cursor's world offset `delta`. */
+  void grab_begin(const DabInput& input, const BrushSettings& settings);
+  void grab_move(glm::vec3 delta);
+  void grab_end() { grab_entries_.clear(); }
+
+  /** After positions (or only channels) of `vertices` changed by any means (a dab, undo, a
+   *  merged version): normals around them, BVH boxes, and the renderer's queue. */
+  void refresh_after_change(std::span<const uint32_t> vertices, bool positions_changed);
+  /** Vertices to re-upload (unique, unsorted); the renderer clears it. */
+  std::vector<uint32_t>& dirty_vertices() { return dirty_; }
+  void clear_dirty();
+  uint32_t last_dab_vertices() const { return last_dab_vertices_; }
+
+ private:
+  struct RegionVertex {
+    uint32_t vertex;
+    float weight;
+  };
+  struct GrabEntry {
+    uint32_t vertex;
+    float weight;
+    glm::vec3 mirror;  // the symmetry's sign per axis
+    glm::vec3 original;
+  };
+  void gather_region(glm::vec3 center, float radius, glm::vec3 view_direction, bool front_only, Falloff falloff);
+  void apply(const DabInput& input, const BrushSettings& settings, glm::vec3 center, float parity);
+  std::span<const glm::vec3> mirrors(const BrushSettings& settings);
+  uint32_t next_stamp(std::vector<uint32_t>& stamps, uint32_t& epoch);
+  glm::vec3 position(uint32_t v) const;
+  void set_position(uint32_t v, glm::vec3 p);
+
+  MeshDocument& document_;
+  TriangleBvh& bvh_;
+  StrokeHistory& history_;
+  // Scratch reused by every dab (no allocation once warmed up).
+  std::vector<RegionVertex> region_;
+  std::vector<glm::vec3> targets_;
+  std::vector<glm::vec3> mirrors_;
+  std::vector<uint32_t> region_stamp_, triangle_stamp_, normal_stamp_, dirty_stamp_;
+  uint32_t region_epoch_ = 0, triangle_epoch_ = 0, normal_epoch_ = 0, dirty_epoch_ = 1;
+  std::vector<uint32_t> changed_, changed_triangles_, normal_vertices_, dirty_;
+  std::vector<GrabEntry> grab_entries_;
+  uint32_t last_dab_vertices_ = 0;
+};

@@ -1,0 +1,162 @@
+#include "session_link.h"
+
+#include <algorithm>
+#include <cstdio>
+
+namespace {
+
+constexpr size_t kMaxMessages = 8;
+
+std::string abi_error(const char* what, csc_status status) {
+  return std::string(what) + ": " + csc_status_str(status) + ": " + csc_last_error();
+}
+
+csc_session_options app_options() {
+  csc_session_options options = CSC_SESSION_OPTIONS_INIT;
+  options.name = "csculpt-app";
+  options.join_timeout_ms = 10000;
+  return options;
+}
+
+}  // namespace
+
+SessionLink::~SessionLink() {
+  if (join_.valid()) {  // a join still under way: wait for it so its session is not leaked
+    JoinResult result = join_.get();
+    csc_session_destroy(result.session);
+  }
+  csc_session_destroy(session_);
+}
+
+bool SessionLink::host(const csc_mesh* mesh, std::string& error) {
+  options_ = app_options();
+  csc_session* session = nullptr;
+  if (csc_status s = csc_session_create(&session, mesh, &options_); s != CSC_OK) {
+    error = abi_error("cannot host a session", s);
+    return false;
+  }
+  csc_session_destroy(session_);
+  session_ = session;
+  peers_.clear();
+  version_pending_ = false;
+  status_ = "hosting";
+  note("hosting: share the invite");
+  return true;
+}
+
+void SessionLink::begin_join(const std::string& invite) {
+  options_ = app_options();
+  status_ = "joining...";
+  // csc_session_join waits for the snapshot; csc_last_error is thread-local, so the worker
+  // takes the words along with the result.
+  join_ = std::async(std::launch::async, [invite, options = options_] {
+    JoinResult result;
+    if (csc_status s = csc_session_join(&result.session, invite.c_str(), &options); s != CSC_OK)
+      result.error = abi_error("cannot join", s);
+    return result;
+  });
+}
+
+int SessionLink::poll_join(std::string& error) {
+  if (!join_.valid() || join_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return 0;
+  JoinResult result = join_.get();
+  if (!result.session) {
+    error = result.error;
+    status_ = session_ ? status_ : "not in a session";
+    note(error);
+    return -1;
+  }
+  csc_session_destroy(session_);
+  session_ = result.session;
+  peers_.clear();
+  version_pending_ = false;
+  status_ = "joined";
+  note("joined the session");
+  return 1;
+}
+
+void SessionLink::note(std::string message) {
+  messages_.push_back(std::move(message));
+  if (messages_.size() > kMaxMessages) messages_.erase(messages_.begin());
+}
+
+void SessionLink::set_peer(uint64_t id, PeerState state) {
+  auto it = std::find_if(peers_.begin(), peers_.end(), [&](const Peer& p) { return p.id == id; });
+  if (it == peers_.end()) peers_.push_back({id, state});
+  else it->state = state;
+}
+
+void SessionLink::poll_events() {
+  if (!session_) return;
+  for (;;) {
+    csc_session_event event = CSC_SESSION_EVENT_INIT;
+    int32_t has_event = 0;
+    if (csc_session_poll(session_, &event, &has_event) != CSC_OK || !has_event) break;
+    char id[32];
+    std::snprintf(id, sizeof id, "%016llx", static_cast<unsigned long long>(event.peer));
+    switch (event.kind) {
+      case CSC_EVENT_JOINED: status_ = "live"; break;
+      case CSC_EVENT_VERSION: version_pending_ = true; break;
+      case CSC_EVENT_PEER_JOINED: set_peer(event.peer, PeerState::live); note(std::string("peer ") + id + " joined"); break;
+      case CSC_EVENT_PEER_EVASIVE: set_peer(event.peer, PeerState::evasive); note(std::string("peer ") + id + " is silent"); break;
+      case CSC_EVENT_PEER_LEFT: set_peer(event.peer, PeerState::left); note(std::string("peer ") + id + " left"); break;
+      case CSC_EVENT_MERGER_CHANGED: note(std::string("peer ") + id + " merges now"); break;
+      case CSC_EVENT_DROPPED: note(std::string("dropped a message: ") + (event.message ? event.message : "")); break;
+      case CSC_EVENT_ERROR:
+        status_ = "network error";
+        note(std::string("network error: ") + (event.message ? event.message : ""));
+        break;
+      default: break;
+    }
+  }
+  csc_session_get_stats(session_, &stats_);
+}
+
+uint32_t SessionLink::update(csc_vertex_arrays& local) {
+  version_pending_ = false;
+  uint32_t applied = 0;
+  if (csc_status s = csc_session_update(session_, &local, &applied); s != CSC_OK) {
+    note(abi_error("cannot apply a merged version", s));
+    return 0;
+  }
+  return applied;
+}
+
+bool SessionLink::submit(csc_vertex_arrays& local, uint32_t strokes) {
+  int32_t sent = 0;
+  last_submit_ = std::chrono::steady_clock::now();
+  if (csc_status s = csc_session_submit(session_, &local, strokes, &sent); s != CSC_OK) {
+    note(abi_error("cannot send the stroke", s));
+    return false;
+  }
+  return sent != 0;
+}
+
+bool SessionLink::resubmit_due() const {
+  return session_ && stats_.strokes_acknowledged < stats_.strokes_submitted &&
+         std::chrono::steady_clock::now() - last_submit_ > std::chrono::milliseconds(options_.sync_ms);
+}
+
+void SessionLink::leave() {
+  if (!session_) return;
+  csc_session_leave(session_);
+  csc_session_destroy(session_);
+  session_ = nullptr;
+  peers_.clear();
+  status_ = "left the session";
+  note("left the session; the mesh is yours to keep");
+}
+
+csc_mesh* SessionLink::copy_base(std::string& error) const {
+  csc_mesh* mesh = nullptr;
+  if (csc_status s = csc_session_copy_base(&mesh, session_); s != CSC_OK) {
+    error = abi_error("cannot copy the session's mesh", s);
+    return nullptr;
+  }
+  return mesh;
+}
+
+bool SessionLink::attribution_colours(std::vector<float>& rgb, uint32_t vertex_count) const {
+  rgb.resize(size_t{vertex_count} * 3);
+  return session_ && csc_session_attribution_colors(session_, rgb.data(), vertex_count) == CSC_OK;
+}

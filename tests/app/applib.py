@@ -1,0 +1,111 @@
+"""Helpers for the csculpt-app tests: run the app (under the Xvfb display the test runs in),
+write replay files, read the PLY files it saves.
+
+The tests run inside `xvfb-run` (run_under_xvfb.sh); every app started here shares that
+display. Mesh statistics come from the saved PLY (csc_mesh_write, binary little endian)."""
+import math
+import os
+import struct
+import subprocess
+import tempfile
+
+APP = os.environ.get("CSCULPT_APP") or os.path.join(os.getcwd(), "csculpt-app")
+# A small sphere keeps the frames fast on llvmpipe; the brushes work the same at any size.
+TEST_SPHERE = ["--sphere-faces", "20000"]
+
+
+def run_app(*args, timeout=60, check=True):
+    """Runs csculpt-app to its exit; returns the CompletedProcess (text stdout/stderr)."""
+    result = subprocess.run([APP, *args], capture_output=True, text=True, timeout=timeout)
+    if check and result.returncode != 0:
+        raise AssertionError(f"csculpt-app {args} exited {result.returncode}:\n{result.stderr}")
+    return result
+
+
+class Replay:
+    """Builds a --replay file: moves, presses, keys and frame waits."""
+
+    def __init__(self):
+        self.lines = ["wait 3"]  # a few frames for the window to settle
+
+    def key(self, name, *mods):
+        self.lines += [f"key {name} {' '.join(mods)}".strip(), "wait 1"]
+        return self
+
+    def wait(self, what):
+        self.lines.append(f"wait {what}")
+        return self
+
+    def pressure(self, value):
+        self.lines.append(f"pressure {value}")
+        return self
+
+    def drag(self, start, end, steps=16, button="left", mods=()):
+        """A drag from start to end in `steps` cursor events, one per frame."""
+        (x0, y0), (x1, y1) = start, end
+        self.lines += [f"move {x0} {y0}", "wait 1", f"press {button} {' '.join(mods)}".strip()]
+        for i in range(1, steps + 1):
+            t = i / steps
+            self.lines += [f"move {x0 + (x1 - x0) * t:.1f} {y0 + (y1 - y0) * t:.1f}", "wait 1"]
+        self.lines += [f"release {button}", "wait 2"]
+        return self
+
+    def write(self, directory, name="input.replay"):
+        path = os.path.join(directory, name)
+        with open(path, "w") as f:
+            f.write("\n".join(self.lines + ["key tab", "wait 2"]) + "\n")  # hide panels: scene only
+        return path
+
+
+class Mesh:
+    """A PLY as csc_mesh_write writes it: float vertex properties, int triangles."""
+
+    def __init__(self, path):
+        with open(path, "rb") as f:
+            data = f.read()
+        end = data.index(b"end_header\n") + len(b"end_header\n")
+        header = data[:end].decode().splitlines()
+        assert header[1] == "format binary_little_endian 1.0", header[1]
+        self.properties, self.vertex_count, self.face_count = [], 0, 0
+        element = None
+        for line in header:
+            words = line.split()
+            if words[0] == "element":
+                element = words[1]
+                if element == "vertex":
+                    self.vertex_count = int(words[2])
+                elif element == "face":
+                    self.face_count = int(words[2])
+            elif words[0] == "property" and element == "vertex":
+                assert words[1] == "float", line
+                self.properties.append(words[2])
+        width = len(self.properties)
+        values = struct.unpack_from(f"<{self.vertex_count * width}f", data, end)
+        self.columns = {name: values[i::width] for i, name in enumerate(self.properties)}
+        self.raw = data
+
+    def position(self, v):
+        return (self.columns["x"][v], self.columns["y"][v], self.columns["z"][v])
+
+    def radius(self, v):
+        return math.sqrt(sum(c * c for c in self.position(v)))
+
+
+def moved_vertices(before, after):
+    """Indices whose position differs."""
+    return [v for v in range(before.vertex_count) if before.position(v) != after.position(v)]
+
+
+def changed_in(before, after, name):
+    return [v for v in range(before.vertex_count) if before.columns[name][v] != after.columns[name][v]]
+
+
+def mean(values):
+    values = list(values)
+    return sum(values) / len(values) if values else 0.0
+
+
+def temp_dir(test):
+    directory = tempfile.TemporaryDirectory(prefix="csculpt-app-test-")
+    test.addCleanup(directory.cleanup)
+    return directory.name

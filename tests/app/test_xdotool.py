@@ -1,0 +1,118 @@
+"""A person at the mouse: xdotool moves the real X pointer over csculpt-app's window under
+Xvfb. A left drag across the sphere sculpts it (the saved mesh differs from the untouched one,
+outwards, as the draw brush does); a click on the panel's "Host a session" button hosts (the
+app prints its INVITE line). Two apps side by side: host by a click, "Copy invite", paste it
+(Ctrl+V) into the other's invite field and click "Join": they are in one session."""
+import os
+import queue
+import shutil
+import subprocess
+import sys
+import threading
+import time
+import unittest
+
+sys.path.insert(0, os.path.dirname(__file__))
+from applib import APP, TEST_SPHERE, Mesh, mean, moved_vertices, run_app, temp_dir  # noqa: E402
+
+HOST_BUTTON = (1030, 63)  # the Session panel's first button (panels are fixed in place)
+
+
+def xdotool(*args):
+    return subprocess.run(["xdotool", *map(str, args)], check=True, capture_output=True, text=True).stdout
+
+
+class RealPointer(unittest.TestCase):
+    def setUp(self):
+        if not shutil.which("xdotool"):
+            self.skipTest("xdotool is not installed")
+
+    def test_drag_sculpts_and_click_hosts(self):
+        directory = temp_dir(self)
+        base, edited = os.path.join(directory, "base.ply"), os.path.join(directory, "edited.ply")
+        run_app(*TEST_SPHERE, "--exit-after", "0", "--save", base)
+        app = subprocess.Popen([APP, *TEST_SPHERE, "--exit-after", "12", "--save", edited],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        self.addCleanup(lambda: app.poll() is None and app.kill())
+        self.addCleanup(app.stderr.close)
+        lines = queue.Queue()
+        threading.Thread(target=lambda: [lines.put(line.strip()) for line in app.stdout], daemon=True).start()
+        self.assertEqual(lines.get(timeout=30), "READY")
+        window = xdotool("search", "--sync", "--name", "^cSculpt$").split()[0]
+
+        def move(x, y, pause=0.05):
+            xdotool("mousemove", "--window", window, x, y)
+            time.sleep(pause)
+
+        # ImGui 1.86 counts a click only if the pointer was over the widget a frame before:
+        # every step waits longer than a frame.
+        move(590, 400, 0.5)
+        xdotool("mousedown", "1")
+        time.sleep(0.2)
+        for step in range(1, 23):
+            move(590 + 5 * step, 400)
+        xdotool("mouseup", "1")
+        time.sleep(0.5)
+        move(*HOST_BUTTON, 0.6)
+        xdotool("mousedown", "1")
+        time.sleep(0.2)
+        xdotool("mouseup", "1")
+
+        invite = lines.get(timeout=10)
+        self.assertTrue(invite.startswith("INVITE "), invite)
+        self.assertGreater(len(invite), 40)
+        self.assertEqual(app.wait(timeout=60), 0, app.stderr.read())
+        app.stdout.close()
+        before, after = Mesh(base), Mesh(edited)
+        moved = moved_vertices(before, after)
+        self.assertGreater(len(moved), 50)
+        self.assertGreater(mean(after.radius(v) - before.radius(v) for v in moved), 0.005)
+
+
+    def start(self, *args):
+        app = subprocess.Popen([APP, *TEST_SPHERE, "--size", "640x800", *args], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True)
+        self.addCleanup(lambda: app.poll() is None and app.kill())
+        self.addCleanup(app.stderr.close)
+        self.addCleanup(app.stdout.close)
+        self.assertEqual(app.stdout.readline().strip(), "READY")
+        return app, xdotool("search", "--sync", "--pid", app.pid).split()[0]
+
+    def click(self, window, x, y):
+        # No window manager under Xvfb: focus by hand (ImGui 1.86 reads the pointer of the
+        # focused window only, and keys go to the focused window).
+        xdotool("windowfocus", "--sync", window)
+        xdotool("mousemove", "--window", window, x, y)
+        time.sleep(0.5)  # over the widget for a frame or more before the press
+        xdotool("mousedown", "1")
+        time.sleep(0.2)
+        xdotool("mouseup", "1")
+        time.sleep(0.5)
+
+    def test_host_copy_paste_join_by_clicks(self):
+        # 640 px wide: the Session panel starts at x = 330; its first button (Host a session,
+        # then Copy invite) is at y = 63, the invite field and Join below it at y = 86.
+        host, host_window = self.start("--exit-after", "25")
+        joiner, joiner_window = self.start("--exit-after", "20")
+        xdotool("windowmove", joiner_window, 640, 0)
+        time.sleep(0.5)
+        self.click(host_window, 390, 63)  # Host a session
+        self.assertTrue(host.stdout.readline().startswith("INVITE "))
+        self.click(host_window, 385, 63)  # Copy invite (where Host was)
+        self.click(joiner_window, 430, 86)  # the invite field
+        # ImGui 1.86 has no input queue: a key pressed and released within a frame is lost,
+        # and one held past io.KeyRepeatDelay (0.275 s) repeats: hold V for about 0.15 s.
+        for step, pause in ((("keydown", "ctrl"), 0.2), (("keydown", "v"), 0.15), (("keyup", "v"), 0.2),
+                            (("keyup", "ctrl"), 0.3)):
+            xdotool(*step)
+            time.sleep(pause)
+        self.click(joiner_window, 558, 86)  # Join
+        out, err = joiner.communicate(timeout=90)
+        self.assertEqual(joiner.returncode, 0, err)
+        session = next((line for line in out.splitlines() if line.startswith("SESSION ")), "")
+        self.assertIn("members=2", session, out + err)  # it joined the host's session
+        host.communicate(timeout=90)
+
+
+if __name__ == "__main__":
+    unittest.main()
