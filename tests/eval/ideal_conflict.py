@@ -60,9 +60,10 @@ def toward_sum(cases):
     return found
 
 
-def interval(case_dir):
-    """(lo, hi) of a in [0, 1] meeting both rules, or None; None too when the ideals agree."""
-    finest, stack, frame, plain = load(case_dir)
+def interval(case):
+    """(lo, hi) of a in [0, 1] meeting both rules for a loaded case, or None when the ideals
+    agree."""
+    finest, stack, frame, plain = case
     if rel_err(frame, stack, finest) < 0.01:
         return None
     ok = [a / STEPS for a in range(STEPS + 1)
@@ -78,12 +79,13 @@ def main():
             path = os.path.join(d, case)
             if not os.path.exists(os.path.join(path, "ideal_frame.ply")):
                 continue
-            r = interval(path)
+            case_data = load(path)
+            r = interval(case_data)
             if r is None:
                 print("%-34s the ideals agree" % case)
                 continue
             print("%-34s a in [%.2f, %.2f]" % (case, r[0], r[1]))
-            conflicting.append(load(path))
+            conflicting.append(case_data)
             lo, hi = max(lo, r[0]), min(hi, r[1])
     print("every case: " + ("a in [%.2f, %.2f]" % (lo, hi) if lo <= hi else
                             "no a meets both rules (the ideals conflict)"))
