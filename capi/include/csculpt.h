@@ -502,6 +502,40 @@ CSC_API csc_status csc_session_submit(csc_session* session, const csc_vertex_arr
 CSC_API csc_status csc_session_update(csc_session* session, const csc_vertex_arrays* local,
                                       uint32_t* applied);
 
+/* ---- Undo inside a session ------------------------------------------------------------------
+ * Each artist undoes and redoes their own strokes; everyone else's merged work stays. Undoing
+ * a stroke merges its removal (the session's merge) with everything that happened on the mesh
+ * since, so where another artist bent or twisted the region over the stroke, the stroke goes
+ * away along the moved surface (subtracting its translation would leave a dent elsewhere).
+ * The host records each stroke when it ends; undo and redo write into the host's arrays, and
+ * the next csc_session_submit() sends the result like any edit (count it as a stroke). */
+
+/** Records a stroke the host just ended: the `count` vertices it changed (`vertices`, each
+ *  once) and their values before it in `before`: count * stride floats, per vertex the
+ *  position (3) and then every channel's `width` values in the session mesh's channel order
+ *  (stride = 3 + the sum of the widths). `local` holds the values after it. Recording drops
+ *  the strokes that could be redone; past 100 strokes or 256 MiB the oldest go. Fails with
+ *  CSC_ERROR_INVALID_INPUT naming a vertex out of range or repeated, a size mismatch or a
+ *  non-finite value (nothing is recorded). */
+CSC_API csc_status csc_session_record_stroke(csc_session* session, const csc_vertex_arrays* local,
+                                             const uint32_t* vertices, uint32_t count,
+                                             const float* before);
+
+/** Undoes this artist's latest recorded stroke in `local` (written in place). `*changed` (may
+ *  be NULL; borrowed until the next undo or redo on this session) lists the `*changed_count`
+ *  vertices whose values changed, increasing; 0 when there was nothing to undo. */
+CSC_API csc_status csc_session_undo(csc_session* session, const csc_vertex_arrays* local,
+                                    const uint32_t** changed, uint32_t* changed_count);
+
+/** Redoes the latest undone stroke the same way. */
+CSC_API csc_status csc_session_redo(csc_session* session, const csc_vertex_arrays* local,
+                                    const uint32_t** changed, uint32_t* changed_count);
+
+/** How many strokes csc_session_undo and csc_session_redo can take back / put back (either
+ *  pointer may be NULL). */
+CSC_API csc_status csc_session_undo_depth(const csc_session* session, uint32_t* undo,
+                                          uint32_t* redo);
+
 typedef enum csc_event_kind {
   CSC_EVENT_JOINED = 0,         /**< this peer holds the session's mesh */
   CSC_EVENT_VERSION = 1,        /**< a merged version is ready for csc_session_update */

@@ -66,6 +66,7 @@ struct csc_session {
   std::string invite;
   std::string event_message;  // of the last polled event
   std::vector<csculpt::peer::Event> pending_events;
+  std::vector<std::uint32_t> changed;  // of the last undo or redo
   bool left = false;
 };
 
@@ -176,5 +177,14 @@ std::span<const float> floats(const std::vector<Vec3f>& v);
 csc_vertex_arrays host_arrays(const csc_vertex_arrays* in, const Mesh& base, const char* name);
 
 std::unique_ptr<csc_diff> new_diff(Diff d);
+
+// ---- Sessions (capi_session.cpp) ----------------------------------------------------------
+
+/// The session behind `s`, refused (argument error) once left.
+csc_session& live_session(csc_session* s);
+/// Host arrays -> the mirror (channels given as NULL keep the mirror's values).
+void copy_in(const csc_vertex_arrays& a, Mesh& m);
+/// The mirror -> host arrays (channels given as NULL are not written).
+void copy_out(const Mesh& m, const csc_vertex_arrays& a);
 
 }  // namespace csculpt::capi

@@ -45,6 +45,10 @@ std::unique_ptr<csc_session> new_session(std::unique_ptr<csculpt::peer::Session>
   return h;
 }
 
+}  // namespace
+
+namespace csculpt::capi {
+
 csc_session& live_session(csc_session* s) {
   csc_session& h = handle(s, Tag::session, "session");
   if (h.left) bad_argument("the session was left");
@@ -68,7 +72,7 @@ void copy_out(const csculpt::Mesh& m, const csc_vertex_arrays& a) {
                   m.channels[c].values.size() * sizeof(float));
 }
 
-}  // namespace
+}  // namespace csculpt::capi
 
 extern "C" {
 

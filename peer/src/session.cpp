@@ -13,6 +13,7 @@
 #include "merger_role.h"
 #include "peer_node.h"
 #include "rebase.h"
+#include "undo_stack.h"
 
 namespace csculpt::peer {
 
@@ -47,6 +48,7 @@ struct Session::Impl {
   /// Strokes sent but not yet seen inside a merged version, and what each submit carried.
   std::uint32_t unacknowledged_strokes = 0;
   std::map<std::uint64_t, std::uint32_t> strokes_at;
+  UndoStack undo;
   // the host side's statistics
   std::uint64_t versions_applied = 0, rebases = 0, strokes_submitted = 0;
 
@@ -55,6 +57,9 @@ struct Session::Impl {
     hierarchy = node->host().hierarchy();
     frame = node->host().frame();
     merger = std::make_unique<Merger>(*hierarchy);
+    const EncodeOptions wire = session_wire_options(options.wire, frame);
+    undo.set_tolerance(static_cast<float>(wire.position_tolerance * wire.position_scale),
+                       static_cast<float>(wire.channel_tolerance));
   }
   void apply_snapshot(const HostItem& item, Mesh& local);
   /// Applies a merged version; true if an edit we submitted was left out of it (resend).
@@ -208,6 +213,40 @@ std::size_t Session::update(Mesh& local) {
   s.versions_applied += applied;
   if (resend && !local.positions.empty()) submit(local, 0);
   return applied;
+}
+
+void Session::record_stroke(const Mesh& local, std::span<const std::uint32_t> vertices,
+                            std::span<const float> before) {
+  Impl& s = *impl_;
+  if (!same_layout(s.base, local))
+    throw InvalidInput(
+        "record_stroke: the local mesh's vertices or channels differ from the session's");
+  s.ensure_merge_state();
+  s.undo.record(local, s.hierarchy->topology(), vertices, before);
+}
+
+bool Session::undo(Mesh& local, std::vector<std::uint32_t>& changed) {
+  Impl& s = *impl_;
+  if (!same_layout(s.base, local))
+    throw InvalidInput("undo: the local mesh's vertices or channels differ from the session's");
+  s.ensure_merge_state();
+  return s.undo.undo(local, *s.merger, s.frame, changed);
+}
+
+bool Session::redo(Mesh& local, std::vector<std::uint32_t>& changed) {
+  Impl& s = *impl_;
+  if (!same_layout(s.base, local))
+    throw InvalidInput("redo: the local mesh's vertices or channels differ from the session's");
+  s.ensure_merge_state();
+  return s.undo.redo(local, *s.merger, s.frame, changed);
+}
+
+std::size_t Session::undo_depth() const {
+  return impl_->undo.undo_depth();
+}
+
+std::size_t Session::redo_depth() const {
+  return impl_->undo.redo_depth();
 }
 
 std::vector<Event> Session::poll_events() {

@@ -18,6 +18,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -34,7 +35,8 @@ struct SessionOptions {
   std::string name;
   /// This peer's id (the election picks the lowest live id); 0 = random.
   PeerId id = 0;
-  /// The merger merges this often (at least 1 ms, see validate_options; the paper used 5 s and 20 s).
+  /// The merger merges this often (at least 1 ms, see validate_options; the paper used 5 s and 20
+  /// s).
   Millis sync{250};
   MembershipOptions membership;
   /// Wire tolerances of submitted and merged diffs (see wire.h); with position_scale 0 the
@@ -155,6 +157,22 @@ class Session {
   /// applied twice. A submitted edit that a version did not include (it reached the merger
   /// after the merge) is sent again, rebased, at once. Returns the number of versions applied.
   std::size_t update(Mesh& local);
+  /// Records a stroke the host just ended on `local`, for undo(): the vertices it changed and
+  /// their values before it (per vertex: the position, then every channel's values in the
+  /// session mesh's channel order). Recording drops the strokes that could be redone; the
+  /// oldest go past 100 strokes or 256 MiB. Throws InvalidInput naming a bad vertex or value.
+  void record_stroke(const Mesh& local, std::span<const std::uint32_t> vertices,
+                     std::span<const float> before);
+  /// Undoes this artist's latest recorded stroke in `local`: the stroke's removal merged (the
+  /// session's merge) with everything that happened on the mesh since, so other artists' work
+  /// stays, also where they rotated the region over it. `changed` gets the vertices written;
+  /// submit() then sends the undo like any edit. False when there is nothing to undo.
+  bool undo(Mesh& local, std::vector<std::uint32_t>& changed);
+  /// Redoes the latest undone stroke the same way.
+  bool redo(Mesh& local, std::vector<std::uint32_t>& changed);
+  /// Strokes undo() and redo() can take back / put back.
+  std::size_t undo_depth() const;
+  std::size_t redo_depth() const;
   /// Events since the last call (at most 10,000 are kept).
   std::vector<Event> poll_events();
   SessionStats stats() const;
