@@ -40,6 +40,7 @@ class App final : public InputHandlers {
   void on_scroll(double dy) override;
   void on_pressure(float pressure) override { pressure_ = pressure; }
   bool in_session() const override { return session_.active(); }
+  unsigned long long session_version() const override { return session_.active() ? session_.version() : 0; }
 
  private:
   enum class Drag { none, stroke, orbit, pan };
@@ -68,6 +69,7 @@ class App final : public InputHandlers {
   void continue_stroke();
   void end_stroke();
   void undo();
+  void session_step(bool redo);
   void redo();
   bool shortcut(int key, int mods);
   // panels.cpp

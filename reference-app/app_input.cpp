@@ -98,6 +98,10 @@ void App::end_stroke() {
   if (drag_ == Drag::stroke) {
     sculptor_.grab_end();
     history_.end_stroke(document_);
+    if (session_.active() && history_.has_last()) {
+      csc_vertex_arrays local = document_.vertex_arrays();
+      session_.record_stroke(local, history_.last_vertices(), history_.last_before());
+    }
     ++strokes_since_submit_;  // sent when the stroke ends (session_tick), never mid-stroke
   }
   drag_ = Drag::none;
@@ -135,16 +139,23 @@ void App::on_scroll(double dy) {
 }
 
 void App::undo() {
-  if (session_.active()) {
-    error_ = "Undo in a session needs the merge-aware undo of a later version; solo strokes only.";
-    return;
-  }
+  if (session_.active()) return session_step(false);
   if (history_.undo(document_, undo_changed_)) sculptor_.refresh_after_change(undo_changed_, true);
 }
 
 void App::redo() {
-  if (session_.active()) return;
+  if (session_.active()) return session_step(true);
   if (history_.redo(document_, undo_changed_)) sculptor_.refresh_after_change(undo_changed_, true);
+}
+
+// In a session the artist's own strokes are undone by the session (merged with everyone's
+// work since) and sent like a stroke; the local history only records them.
+void App::session_step(bool redo) {
+  if (drag_ == Drag::stroke) return;
+  csc_vertex_arrays local = document_.vertex_arrays();
+  if (!session_.undo(local, redo)) return;
+  sync_after_session_write();
+  ++strokes_since_submit_;
 }
 
 void App::on_key(int key, int action, int mods) {

@@ -12,4 +12,6 @@ struct InputHandlers {
   virtual void on_pressure(float pressure) = 0;
   /** For the replay's `wait session`: true once this app holds a session's mesh. */
   virtual bool in_session() const = 0;
+  /** For the replay's `wait version N`: the agreed version this app has applied (0 solo). */
+  virtual unsigned long long session_version() const = 0;
 };

@@ -93,16 +93,15 @@ void App::draw_tool_panel() {
   if (ImGui::Button("Top (7)")) camera_.set_view(ViewPreset::top);
 
   section("History");
-  ImGui::BeginDisabled(session_.active());
-  ImGui::BeginDisabled(!history_.can_undo());
+  const bool in_session = session_.active();
+  ImGui::BeginDisabled(in_session ? session_.undo_depth() == 0 : !history_.can_undo());
   if (ImGui::Button("Undo (Ctrl+Z)")) undo();
   ImGui::EndDisabled();
   ImGui::SameLine();
-  ImGui::BeginDisabled(!history_.can_redo());
+  ImGui::BeginDisabled(in_session ? session_.redo_depth() == 0 : !history_.can_redo());
   if (ImGui::Button("Redo (Ctrl+Shift+Z)")) redo();
   ImGui::EndDisabled();
-  ImGui::EndDisabled();
-  if (session_.active()) ImGui::TextWrapped("Undo in a session comes with the merge-aware undo (a later version).");
+  if (in_session) ImGui::TextDisabled("your own strokes; others' work stays");
 
   section("File");
   ImGui::InputText("##path", path_text_.data(), path_text_.size());
@@ -125,7 +124,7 @@ void App::draw_tool_panel() {
         "B paint colour  R roughness  M metallic\n"
         "[ ] radius  - = strength  F1-F5 falloff  E invert  V front faces  X Y Z symmetry\n"
         "1 3 7 front/side/top  F flat  W wireframe  A attribution (session)  Tab hide panels\n"
-        "Ctrl+Z / Ctrl+Shift+Z undo / redo (solo)");
+        "Ctrl+Z / Ctrl+Shift+Z undo / redo (your own strokes, also in a session)");
   }
   ImGui::Text("%.1f fps", ImGui::GetIO().Framerate);
   panel_rects_.push_back({ImGui::GetWindowPos().x, ImGui::GetWindowPos().y, ImGui::GetWindowSize().x,

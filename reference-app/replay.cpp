@@ -79,6 +79,9 @@ bool ReplayPlayer::load(const std::string& path, std::string& error) {
       words >> what;
       if (what == "session") {
         e.kind = Kind::wait_session;
+      } else if (what == "version") {
+        e.kind = Kind::wait_version;
+        ok = static_cast<bool>(words >> e.code) && e.code >= 1;
       } else {
         e.kind = Kind::wait;
         std::istringstream count(what);
@@ -102,6 +105,8 @@ bool ReplayPlayer::load(const std::string& path, std::string& error) {
 void ReplayPlayer::step(InputHandlers& input) {
   if (waiting_for_session_ && !input.in_session()) return;
   waiting_for_session_ = false;
+  if (waiting_for_version_ > 0 && input.session_version() < waiting_for_version_) return;
+  waiting_for_version_ = 0;
   if (waiting_ > 0 && --waiting_ > 0) return;
   while (next_ < events_.size()) {
     const Event& e = events_[next_++];
@@ -119,6 +124,7 @@ void ReplayPlayer::step(InputHandlers& input) {
       case Kind::scroll: input.on_scroll(e.y); break;
       case Kind::wait: waiting_ = e.code; return;
       case Kind::wait_session: waiting_for_session_ = true; return;
+      case Kind::wait_version: waiting_for_version_ = static_cast<unsigned long long>(e.code); return;
     }
   }
 }

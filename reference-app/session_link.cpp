@@ -132,6 +132,37 @@ bool SessionLink::submit(csc_vertex_arrays& local, uint32_t strokes) {
   return sent != 0;
 }
 
+void SessionLink::record_stroke(csc_vertex_arrays& local, const std::vector<uint32_t>& vertices,
+                                const std::vector<float>& before) {
+  const uint32_t count = static_cast<uint32_t>(vertices.size());
+  if (csc_status s = csc_session_record_stroke(session_, &local, vertices.data(), count, before.data());
+      s != CSC_OK)
+    note(abi_error("cannot keep the stroke for undo", s));
+}
+
+bool SessionLink::undo(csc_vertex_arrays& local, bool redo) {
+  uint32_t changed = 0;
+  const csc_status s = redo ? csc_session_redo(session_, &local, nullptr, &changed)
+                            : csc_session_undo(session_, &local, nullptr, &changed);
+  if (s != CSC_OK) {
+    note(abi_error(redo ? "cannot redo" : "cannot undo", s));
+    return false;
+  }
+  return changed > 0;
+}
+
+uint32_t SessionLink::undo_depth() const {
+  uint32_t n = 0;
+  if (session_) csc_session_undo_depth(session_, &n, nullptr);
+  return n;
+}
+
+uint32_t SessionLink::redo_depth() const {
+  uint32_t n = 0;
+  if (session_) csc_session_undo_depth(session_, nullptr, &n);
+  return n;
+}
+
 bool SessionLink::resubmit_due() const {
   return session_ && stats_.strokes_acknowledged < stats_.strokes_submitted &&
          std::chrono::steady_clock::now() - last_submit_ > std::chrono::milliseconds(options_.sync_ms);

@@ -42,6 +42,14 @@ class SessionLink {
   uint32_t update(csc_vertex_arrays& local);
   /** Sends the edit since the agreed version; `strokes` ended since the last submit. */
   bool submit(csc_vertex_arrays& local, uint32_t strokes);
+  /** Hands an ended stroke to the session's undo (its vertices and their values before). */
+  void record_stroke(csc_vertex_arrays& local, const std::vector<uint32_t>& vertices,
+                     const std::vector<float>& before);
+  /** Undoes (or redoes) this artist's latest stroke in `local`, merged with everyone's work
+   *  since; false when there was none or it failed (noted). */
+  bool undo(csc_vertex_arrays& local, bool redo);
+  uint32_t undo_depth() const;
+  uint32_t redo_depth() const;
   /** Re-sends while strokes are unacknowledged, once per sync interval (csculpt.h asks it). */
   bool resubmit_due() const;
   void leave();

@@ -1,7 +1,8 @@
 // Local undo/redo of the artist's own strokes: each stroke keeps the values (position and
 // every channel) of the vertices it touched, before and after, so undo and redo restore them
-// bit for bit. Solo only: in a session the agreed mesh moves under the stroke, and undoing it
-// there needs the merge-aware undo of a later ABI (issue 11).
+// bit for bit. Solo only: in a session the agreed mesh moves under the stroke, so there the
+// app hands each ended stroke (last_vertices, last_before) to the session's own undo
+// (csc_session_record_stroke), which merges the removal with everyone's later work.
 #pragma once
 
 #include <cstdint>
@@ -25,6 +26,10 @@ class StrokeHistory {
   bool undo(MeshDocument& document, std::vector<uint32_t>& changed);
   bool redo(MeshDocument& document, std::vector<uint32_t>& changed);
   size_t undo_depth() const { return undo_count_; }
+  /** The stroke end_stroke() last kept: its vertices and their values before it. */
+  const std::vector<uint32_t>& last_vertices() const { return strokes_.back().vertices; }
+  const std::vector<float>& last_before() const { return strokes_.back().before; }
+  bool has_last() const { return !strokes_.empty() && undo_count_ == strokes_.size(); }
 
  private:
   struct Stroke {

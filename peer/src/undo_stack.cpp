@@ -180,7 +180,9 @@ void UndoStack::step(const Record& r, bool undoing, Mesh& local, Merger& merger,
   const Diff step = capture_diff(from, mine);
   const Diff* both[2] = {&theirs, &step};
   Mesh out = from;
-  apply_diff(merger.merge(from, both, MergeMethod::full, frame), out);
+  // The stroke's removal and everyone's later work are different intents even where they
+  // happen to move a vertex alike (a colleague's inflate over my draw, redone): both add.
+  apply_diff(merger.merge(from, both, MergeMethod::full, frame, SameChange::add), out);
   const Diff moved = capture_diff(local, out);
   for (std::uint32_t v : moved.positions.indices) changed.push_back(v);
   for (const ChannelDiff& c : moved.channels)

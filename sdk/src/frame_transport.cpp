@@ -42,13 +42,14 @@ class Transport {
  public:
   Transport(const Topology& topology, std::span<const Vec3f> base,
             std::span<const std::uint32_t> vertices, std::span<const TransportInput> users,
-            TransportScratch& scratch)
+            bool same_once, TransportScratch& scratch)
       : topology_(topology),
         base_(base),
         vertices_(vertices),
         users_(users),
         scratch_(scratch),
-        n_(users.size()) {}
+        n_(users.size()),
+        same_once_(same_once) {}
 
   void find_seams();
   void share_normals();
@@ -70,6 +71,8 @@ class Transport {
   std::span<const TransportInput> users_;
   TransportScratch& scratch_;
   std::size_t n_;
+  bool same_once_;  ///< false: s = 0 (SameChange::add)
+  double same(const VertexState& s, std::size_t i, std::size_t j) const;
 };
 
 std::uint64_t position_hash(const Vec3f& p) {
@@ -245,6 +248,10 @@ double sameness(const VertexState& s, std::size_t i, std::size_t j) {
   return r * r;
 }
 
+double Transport::same(const VertexState& s, std::size_t i, std::size_t j) const {
+  return same_once_ ? sameness(s, i, j) : 0.0;
+}
+
 Vec3f Transport::merged(std::size_t at) const {
   VertexState s;
   load(at, s);
@@ -256,11 +263,11 @@ Vec3f Transport::merged(std::size_t at) const {
     if (!s.moves[j]) continue;
     double count = 1;
     for (std::size_t k = 0; k < n_; ++k)
-      if (k != j && s.moves[k]) count += sameness(s, j, k);
+      if (k != j && s.moves[k]) count += same(s, j, k);
     Vec3d carried = s.d[j];
     for (std::size_t i = n_; i-- > 0;) {
       if (i == j || !s.turns[i]) continue;
-      const double g = (1.0 - sameness(s, i, j)) * scratch_.weight[i * n_ + j];
+      const double g = (1.0 - same(s, i, j)) * scratch_.weight[i * n_ + j];
       if (!(g > 0)) continue;
       if (!have_normal) n = normal(at), have_normal = true;
       carried = add(carried, scale(rotation_change(swing(s.rotation[i], n), carried), g));
@@ -275,9 +282,10 @@ Vec3f Transport::merged(std::size_t at) const {
 
 void transport_positions(const Topology& topology, std::span<const Vec3f> base,
                          std::span<const std::uint32_t> vertices,
-                         std::span<const TransportInput> users, TransportScratch& scratch,
-                         WorkerPool& pool, std::size_t grain, std::span<Vec3f> moved) {
-  Transport t(topology, base, vertices, users, scratch);
+                         std::span<const TransportInput> users, bool same_once,
+                         TransportScratch& scratch, WorkerPool& pool, std::size_t grain,
+                         std::span<Vec3f> moved) {
+  Transport t(topology, base, vertices, users, same_once, scratch);
   t.find_seams();
   t.share_normals();
   const std::size_t n = users.size();

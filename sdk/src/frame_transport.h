@@ -64,10 +64,12 @@ struct TransportScratch {
 };
 
 /// Merged positions of the vertices in `vertices` (increasing: the union of the changed
-/// ones) into `moved` (one per vertex), using `pool` in chunks of `grain`.
+/// ones) into `moved` (one per vertex), using `pool` in chunks of `grain`. `same_once`: the
+/// sameness s as above; false takes s = 0 (SameChange::add: every displacement adds).
 void transport_positions(const Topology& topology, std::span<const Vec3f> base,
                          std::span<const std::uint32_t> vertices,
-                         std::span<const TransportInput> users, TransportScratch& scratch,
+                         std::span<const TransportInput> users, bool same_once,
+                         TransportScratch& scratch,
                          WorkerPool& pool, std::size_t grain, std::span<Vec3f> moved);
 
 }  // namespace csculpt::detail

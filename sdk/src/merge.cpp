@@ -463,7 +463,8 @@ void decompose(const ParentLinks& links, std::size_t level_count,
 ///    residuals blend (idempotence), independent ones add (so a detail and the fine
 ///    residual of a large edit both survive), a null residual changes nothing (identity);
 ///    symmetric and continuous. With s = 1 everywhere it is the paper's operator.
-enum class NodeBlend { magnitude, intent };
+///  - independent: intent with s_jk = 0 for j != k: every residual adds (SameChange::add).
+enum class NodeBlend { magnitude, intent, independent };
 
 using detail::kMaxDiffs;
 
@@ -485,6 +486,7 @@ typename Ops::Reg blend_residuals(NodeBlend rule, const typename Ops::Reg* r, co
     float same = 0;
     for (std::size_t k = 0; k < n; ++k) {
       if (!(m[k] > 0)) continue;
+      if (k != j && rule == NodeBlend::independent) continue;
       const float closeness =
           k == j ? 1.f : std::max(0.f, 1.f - Ops::distance(r[j], r[k]) / std::max(m[j], m[k]));
       const float s = closeness * closeness;
@@ -640,7 +642,9 @@ struct MethodTraits {
   NodeBlend node_blend;      // for positions and channels
   bool channels_per_vertex;  // channels blend per vertex (else over the hierarchy)
   bool transport = false;    // positions: displacements carried in each other's frames
+  bool same_once = true;     // matching changes count once (SameChange::once)
 };
+
 
 MethodTraits traits(MergeMethod m) {
   switch (m) {
@@ -667,6 +671,16 @@ MethodTraits traits(MergeMethod m) {
       return {true, true, false, TranslationBlend::magnitude, NodeBlend::magnitude, false};
   }
   throw InvalidInput("unknown merge method " + std::to_string(static_cast<std::uint32_t>(m)));
+}
+
+/// The method's traits with the merge's rule for matching changes.
+MethodTraits traits(MergeMethod m, SameChange same) {
+  MethodTraits t = traits(m);
+  if (same == SameChange::add) {
+    t.same_once = false;
+    if (t.node_blend == NodeBlend::intent) t.node_blend = NodeBlend::independent;
+  }
+  return t;
 }
 
 /// Canonical order of diffs by content, so the floating-point sums do not depend on the
@@ -873,8 +887,8 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod me
 }
 
 Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMethod method,
-                   const MergeFrame& frame) {
-  const MethodTraits t = traits(method);
+                   const MergeFrame& frame, SameChange same) {
+  const MethodTraits t = traits(method, same);
   timings_ = {};
   require_hierarchy_mesh(hierarchy_, base);
   require_diff_count(diffs.size());
@@ -1045,7 +1059,7 @@ void Merger::Pass::transport_positions() {
                               ws.lookups[u].changed.words.data(), positions_of(u).values.data()};
   }
   detail::transport_positions(hierarchy.topology(), base.positions, changed_union,
-                              ws.transport_inputs, ws.transport, ws.pool, kBlendGrain,
+                              ws.transport_inputs, t.same_once, ws.transport, ws.pool, kBlendGrain,
                               std::span(ws.moved.data(), n_changed));
   for (std::uint32_t u = 0; u < users; ++u) ws.lookups[u].changed.clear(positions_of(u).indices);
   repair_folds(changed_union, std::span(ws.moved.data(), n_changed));

@@ -70,6 +70,16 @@ struct MergeTimings {
   double fold_repair_ms = 0;  ///< looking for them (every merge) and repairing them (part of blend_ms)
 };
 
+/// How a merge treats diffs that make the same change at a vertex.
+enum class SameChange {
+  /// As one intent, counted once (idempotence): two artists who made the same edit get it
+  /// once. What a session's merge does.
+  once,
+  /// Added like any other: the diffs are known to be different intents (an artist's undo or
+  /// redo against everything else that happened), so a matching change is a coincidence.
+  add,
+};
+
 /// Stateful merger: holds the hierarchy and a workspace that is reused across merges, so
 /// repeated merges on one mesh allocate nothing once warm. One merge at a time per Merger
 /// (not thread-safe); separate Mergers may run concurrently.
@@ -93,7 +103,7 @@ class Merger {
              const MergeFrame& frame);
   /// The same, for diffs held elsewhere (no copy): each pointer must be non-null.
   Diff merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMethod method,
-             const MergeFrame& frame);
+             const MergeFrame& frame, SameChange same = SameChange::once);
   Diff merge(const Mesh& base, std::span<const Diff> diffs,
              MergeMethod method = MergeMethod::full) {
     return merge(base, diffs, method, MergeFrame::fit(base.positions));

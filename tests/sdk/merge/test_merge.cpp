@@ -915,4 +915,39 @@ TEST(MergeBadInput, HierarchyOfAnotherMeshWithTheSameVertexCount) {
 }
 
 }  // namespace
+// SameChange::add (an artist's undo against everyone else's work): matching changes are a
+// coincidence, not a copy, so they add like any two edits would, positions and channels.
+TEST(MergeIdempotence, SameChangeAddAddsIdenticalEdits) {
+  const Subject& s = *all_subjects().front();
+  Mesh a = s.base;
+  apply_stroke(a, stroke_at(Kind::inflate, s, s.axis));
+  apply_stroke(a, paint_at(s, s.axis, {0.6f, 0.4f, 0.3f}, 0.5f, 0.5f));
+  const Diff d = capture_diff(s.base, a);
+  Mesh twice = s.base;  // the edit's change applied two times over
+  for (std::size_t v = 0; v < twice.vertex_count(); ++v)
+    twice.positions[v] = add(a.positions[v], sub(a.positions[v], s.base.positions[v]));
+  for (std::size_t c = 0; c < twice.channels.size(); ++c) {
+    const ChannelDesc& desc = twice.channels[c].desc;
+    for (std::size_t i = 0; i < twice.channels[c].values.size(); ++i) {
+      // twice the change in the channel's linear space, where channels merge
+      const float b = to_linear(desc.linearisation, s.base.channels[c].values[i]);
+      const float e = to_linear(desc.linearisation, a.channels[c].values[i]);
+      twice.channels[c].values[i] = std::clamp(from_linear(desc.linearisation, e + (e - b)),
+                                               desc.min_value, desc.max_value);
+    }
+  }
+  Merger merger(s.hierarchy);
+  const Diff* both[2] = {&d, &d};
+  const MergeFrame frame = MergeFrame::fit(s.base.positions);
+  const Mesh once = applied(s.base, merger.merge(s.base, both, MergeMethod::full, frame));
+  const Mesh added =
+      applied(s.base, merger.merge(s.base, both, MergeMethod::full, frame, SameChange::add));
+  EXPECT_LT(max_position_error(once, a), 1e-5 * s.diag);
+  EXPECT_GT(max_position_error(added, a), 0.5 * max_position_error(a, s.base));
+  // Identical displacements carry each other by their own rotations: close to twice, not
+  // exactly (the inflate turns the surface).
+  EXPECT_LT(max_position_error(added, twice), 0.25 * max_position_error(a, s.base));
+  EXPECT_LT(max_channel_error(added, twice), 1e-4);
+}
+
 }  // namespace csculpt
