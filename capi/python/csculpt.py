@@ -366,6 +366,11 @@ PROTOTYPES = {
     "csc_session_submit": (_STATUS, [_SessionP, POINTER(csc_vertex_arrays), c_uint32,
                                      POINTER(c_int32)]),
     "csc_session_update": (_STATUS, [_SessionP, POINTER(csc_vertex_arrays), _U32P]),
+    "csc_session_record_stroke": (_STATUS, [_SessionP, POINTER(csc_vertex_arrays), _U32P,
+                                            c_uint32, _FloatP]),
+    "csc_session_undo": (_STATUS, [_SessionP, POINTER(csc_vertex_arrays), POINTER(_U32P), _U32P]),
+    "csc_session_redo": (_STATUS, [_SessionP, POINTER(csc_vertex_arrays), POINTER(_U32P), _U32P]),
+    "csc_session_undo_depth": (_STATUS, [_SessionP, _U32P, _U32P]),
     "csc_session_poll": (_STATUS, [_SessionP, POINTER(csc_session_event), POINTER(c_int32)]),
     "csc_session_get_stats": (_STATUS, [_SessionP, POINTER(csc_session_stats)]),
     "csc_session_attribution_colors": (_STATUS, [_SessionP, _FloatP, c_uint32]),
@@ -1332,6 +1337,47 @@ class Session(_Handle):
         _lib.csc_session_update(ptr, ctypes.byref(arrays), ctypes.byref(applied))
         del keep
         return applied.value
+
+    def record_stroke(self, positions, vertices, before, channels=None) -> None:
+        """Records a stroke the host just ended, for undo(): the `vertices` it changed and
+        `before`, their values before it (per vertex the position, then every channel's values
+        in the session's channel order). `positions`/`channels` hold the values after it."""
+        ptr, arrays, keep = self._arrays(positions, channels)
+        indices = np.ascontiguousarray(vertices, dtype=np.uint32).ravel()
+        values = np.ascontiguousarray(before, dtype=np.float32).ravel()
+        stride = 3 + sum(width for _, width in self._layout)
+        if values.size != indices.size * stride:
+            raise InvalidArgument(f"csculpt: before holds {values.size} values; {indices.size} "
+                                  f"vertices need {indices.size * stride} ({stride} per vertex)")
+        _lib.csc_session_record_stroke(ptr, ctypes.byref(arrays),
+                                       indices.ctypes.data_as(_U32P), indices.size, _fp(values))
+        del keep
+
+    def _step(self, function, positions, channels) -> np.ndarray:
+        ptr, arrays, keep = self._arrays(positions, channels)
+        changed, count = _U32P(), c_uint32()
+        function(ptr, ctypes.byref(arrays), ctypes.byref(changed), ctypes.byref(count))
+        del keep
+        if count.value == 0:
+            return np.empty(0, dtype=np.uint32)
+        return np.ctypeslib.as_array(changed, shape=(count.value,)).copy()
+
+    def undo(self, positions, channels=None) -> np.ndarray:
+        """Undoes this artist's latest recorded stroke in the host's arrays, merged with
+        everything that happened since (others' work stays). Returns the changed vertices
+        (empty when there was nothing to undo); submit() then sends it like a stroke."""
+        return self._step(_lib.csc_session_undo, positions, channels)
+
+    def redo(self, positions, channels=None) -> np.ndarray:
+        """Redoes the latest undone stroke the same way."""
+        return self._step(_lib.csc_session_redo, positions, channels)
+
+    @property
+    def undo_depth(self) -> Tuple[int, int]:
+        """(strokes undo() can take back, strokes redo() can put back)."""
+        undo, redo = c_uint32(), c_uint32()
+        _lib.csc_session_undo_depth(self._ptr, ctypes.byref(undo), ctypes.byref(redo))
+        return undo.value, redo.value
 
     def poll(self) -> Optional[SessionEvent]:
         """The next event, or None. Never blocks."""

@@ -175,6 +175,74 @@ class TwoPeers(unittest.TestCase):
         wait_for(lambda: a.stats.members == 1, "a to count 1 member")
 
 
+class Undo(unittest.TestCase):
+
+    def test_undo_takes_back_my_stroke_on_both_peers_and_keeps_theirs(self):
+        with material_sphere(4) as mesh, csculpt.Session.create(mesh, id=1, **FAST) as a, \
+                csculpt.Session.join(a.invite, id=2, join_timeout_ms=10000, **FAST) as b:
+            base_p, _ = host_arrays(mesh)
+            pa, ca = host_arrays(mesh)
+            with b.base() as b_base:
+                pb, cb = host_arrays(b_base)
+            stride = 3 + 3 + 1 + 1
+            # a grabs the north cap sideways and records it for undo ...
+            before = np.concatenate([pa] + [c.reshape(len(pa), -1) for c in ca.values()], axis=1)
+            pa[:] = meshes.grab(pa, (0, 0, 1), 0.7, (0.25, 0, 0))
+            mine = np.flatnonzero(np.any(pa != base_p, axis=1))
+            a.record_stroke(pa, mine, before[mine], ca)
+            self.assertEqual(a.undo_depth, (1, 0))
+            # ... b grabs a band overlapping it upwards.
+            pb[:] = meshes.grab(pb, (0.6, 0, 0.8), 0.6, (0, 0, 0.2))
+            theirs = np.any(pb != base_p, axis=1)
+            pending = {"a": 1, "b": 1}
+            hosts = {"a": (a, pa, ca), "b": (b, pb, cb)}
+
+            def converged(strokes):
+                for key, (session, p, c) in hosts.items():
+                    session.update(p, c)
+                    if session.submit(p, c, strokes=pending[key]):
+                        pending[key] = 0
+                return (a.version == b.version and a.stats.strokes_acknowledged == strokes and
+                        same_bits(pa, ca, pb, cb))
+
+            wait_for(lambda: converged(1) and b.stats.strokes_acknowledged == 1, "both strokes")
+            both = pa.copy()
+            changed = a.undo(pa, ca)
+            self.assertGreater(changed.size, 0)
+            self.assertEqual(a.undo_depth, (0, 1))
+            pending["a"] = 1
+            wait_for(lambda: converged(2), "the undo on both peers")
+            tolerance = 4 * csculpt.SESSION_OPTIONS["position_tolerance"] * mesh.bbox_diagonal
+            only_mine = np.zeros(len(pa), bool)
+            only_mine[mine] = True
+            # Vertices sharing a face with b's edit turn with it (the merge carries my removal in
+            # b's frame there): "alone" means away from those faces.
+            triangles = np.asarray(mesh.triangles).reshape(-1, 3)
+            near_theirs = theirs.copy()
+            near_theirs[triangles[theirs[triangles].any(axis=1)].ravel()] = True
+            only_mine &= ~near_theirs
+            self.assertGreater(only_mine.sum(), 10)
+            for p in (pa, pb):  # my stroke is gone where it was alone, on both peers ...
+                np.testing.assert_allclose(p[only_mine], base_p[only_mine], rtol=0, atol=tolerance)
+                # ... and b's upward grab stays, also where the two overlapped.
+                lifted = p[theirs, 2] - base_p[theirs, 2]
+                self.assertGreater(float(lifted.max()), 0.15)
+            self.assertGreater(float(np.abs(both - pa).max()), 0.1)
+            self.assertGreater(a.redo(pa, ca).size, 0)
+            self.assertEqual(a.undo_depth, (1, 0))
+            np.testing.assert_allclose(pa[only_mine], both[only_mine], rtol=0, atol=0.02)
+            self.assertGreater(a.undo(pa, ca).size, 0)
+            self.assertEqual(b.undo(pb, cb).size, 0, "b has no stroke of its own to undo")
+
+            with self.assertRaises(csculpt.InvalidInput):
+                a.record_stroke(pa, [0, 0], np.zeros((2, stride)), ca)  # a vertex twice
+            with self.assertRaises(csculpt.InvalidInput):
+                a.record_stroke(pa, [len(pa)], np.zeros((1, stride)), ca)
+            with self.assertRaises(csculpt.InvalidArgument):
+                a.record_stroke(pa, [1, 2], np.zeros((1, stride)), ca)  # too few values
+            self.assertEqual(a.undo_depth, (0, 1), "a refused stroke changed the history")
+
+
 class Errors(unittest.TestCase):
 
     def test_a_malformed_invite_is_invalid_input(self):
