@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "attribution.h"
+#include "host_values.h"
 #include "replication.h"
 
 namespace csculpt::peer {
@@ -35,11 +36,13 @@ MergerRole::MergerRole(std::shared_ptr<const Hierarchy> hierarchy)
     : hierarchy_(std::move(hierarchy)), merger_(*hierarchy_), folds_(hierarchy_->topology()) {}
 
 bool MergerRole::accept(PeerId author, std::span<const std::uint8_t> diff_bytes,
-                        std::uint32_t strokes, const Mesh& base, std::uint64_t version) {
+                        std::uint32_t strokes, const Mesh& base, std::uint64_t version,
+                        const MergeFrame& frame) {
   const DiffHeader header = peek_diff_header(diff_bytes);
   if (header.base_version != version) return false;
   PendingSubmit p;
   p.diff = decode_diff(diff_bytes, base);
+  check_diff_values(p.diff, base, frame, "a submit");  // the same rule as the host's own
   p.sequence = header.sequence;
   p.strokes = strokes;
   auto [it, inserted] = pending_.try_emplace(author);

@@ -43,9 +43,10 @@ class MergerRole {
 
   /// A submit by `author` of `diff_bytes` (a DiffMessage) at agreed version `version` with
   /// mesh `base`. False (ignored) when based on another version: the author rebases and sends
-  /// again when it sees ours. Throws InvalidInput for a malformed diff.
+  /// again when it sees ours. Throws InvalidInput for a malformed diff or one whose values the
+  /// session refuses from a host (host_values.h: non-finite, out of reach, out of range).
   bool accept(PeerId author, std::span<const std::uint8_t> diff_bytes, std::uint32_t strokes,
-              const Mesh& base, std::uint64_t version);
+              const Mesh& base, std::uint64_t version, const MergeFrame& frame);
   bool empty() const { return pending_.empty(); }
   /// Forgets what `author` sent (it left) or everything (the version moved on, the merger
   /// changed).

@@ -270,7 +270,7 @@ void PeerNode::on_submit(PeerId sender, const fb::Submit& submit) {
   if (!submit.diff()) return dropped("submit without a diff");
   // Based on an older version: the author rebases and sends again when it sees ours.
   if (!merger_->accept(sender, {submit.diff()->data(), submit.diff()->size()}, submit.strokes(),
-                       base_, replication_.version()))
+                       base_, replication_.version(), frame_))
     stale();
 }
 

@@ -3,12 +3,14 @@
 #include "csculpt/peer/session.h"
 
 #include <algorithm>
+#include <deque>
 #include <map>
 
 #include "csculpt/diff.h"
 #include "csculpt/error.h"
 #include "csculpt/hash.h"
 #include "csculpt/merge.h"
+#include "host_values.h"
 #include "invite.h"
 #include "merger_role.h"
 #include "peer_node.h"
@@ -49,6 +51,8 @@ struct Session::Impl {
   std::uint32_t unacknowledged_strokes = 0;
   std::map<std::uint64_t, std::uint32_t> strokes_at;
   UndoStack undo;
+  /// Versions and snapshots taken from the network thread and not yet applied.
+  std::deque<HostItem> pending;
   // the host side's statistics
   std::uint64_t versions_applied = 0, rebases = 0, strokes_submitted = 0;
 
@@ -123,6 +127,10 @@ const Mesh& Session::base() const {
 bool Session::submit(Mesh& local, std::uint32_t strokes) {
   Impl& s = *impl_;
   if (s.left) throw InvalidInput("submit: the session was left");
+  if (!same_layout(s.base, local))
+    throw InvalidInput("submit: the local mesh's vertices or channels differ from the session's");
+  s.ensure_merge_state();
+  check_host_values(local, s.base, s.frame, "submit");  // before anything is sent or written
   const Diff d = capture_diff(s.base, local);
   if (d.positions.empty() && std::all_of(d.channels.begin(), d.channels.end(),
                                          [](const auto& c) { return c.change.empty(); }))
@@ -199,16 +207,25 @@ std::size_t Session::update(Mesh& local) {
   // the older version) is sent again, rebased, once the versions are applied: the host does
   // not have to notice.
   bool resend = false;
-  for (HostItem& item : s.node->host().take_items()) {
+  // Refused before any version is taken: a bad value leaves them waiting for the next call.
+  if (s.has_base && !local.positions.empty()) {
+    if (!same_layout(s.base, local))
+      throw InvalidInput("update: the local mesh's vertices or channels differ from the session's");
+    s.ensure_merge_state();
+    check_host_values(local, s.base, s.frame, "update");
+  }
+  for (HostItem& item : s.node->host().take_items()) s.pending.push_back(std::move(item));
+  while (!s.pending.empty()) {
+    HostItem& item = s.pending.front();
     if (item.snapshot) {
       resend |= !s.submitted.empty();
       s.apply_snapshot(item, local);
+      ++applied;
     } else if (item.version == s.version + 1) {  // always: the node hands them in order
       resend |= s.apply_version(item, local);
-    } else {
-      continue;
+      ++applied;
     }
-    ++applied;
+    s.pending.pop_front();  // only once applied: a failure keeps it for the next call
   }
   s.versions_applied += applied;
   if (resend && !local.positions.empty()) submit(local, 0);

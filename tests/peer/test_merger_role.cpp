@@ -27,28 +27,49 @@ struct Fixture {
   }
 };
 
+// A peer's submit is held to the host's own rule (host_values.h): a vertex thrown far out of
+// the session's reach would turn the merge's rotations around it into noise for everyone.
+TEST(MergerRole, RefusesASubmitThatThrowsAVertexOutOfReach) {
+  Fixture f;
+  Mesh far = f.base;
+  far.positions[3].x = 1e6f;
+  try {
+    f.role.accept(1, f.submit(capture_diff(f.base, far), 0, 1), 1, f.base, 0, f.frame);
+    ADD_FAILURE() << "accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("vertex 3"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("beyond 1000 x"), std::string::npos) << e.what();
+  }
+  Mesh grabbed = f.base;  // a long legitimate grab passes
+  grabbed.positions[3].x += 50 * f.frame.scale;
+  EXPECT_TRUE(
+      f.role.accept(1, f.submit(capture_diff(f.base, grabbed), 0, 1), 1, f.base, 0, f.frame));
+}
+
 TEST(MergerRole, KeepsOnlySubmitsOnTheAgreedVersionAndTheLatestPerAuthor) {
   Fixture f;
   const Diff a = stroke_diff(f.base, {0, 0, 1}, {0.2f, 0, 0});
-  EXPECT_FALSE(f.role.accept(1, f.submit(a, 5, 1), 1, f.base, 4));  // based on another version
+  EXPECT_FALSE(
+      f.role.accept(1, f.submit(a, 5, 1), 1, f.base, 4, f.frame));  // based on another version
   EXPECT_TRUE(f.role.empty());
-  EXPECT_TRUE(f.role.accept(1, f.submit(a, 4, 2), 1, f.base, 4));
+  EXPECT_TRUE(f.role.accept(1, f.submit(a, 4, 2), 1, f.base, 4, f.frame));
   const Diff b = stroke_diff(f.base, {0, 1, 0}, {0, 0, 0.2f});
-  EXPECT_TRUE(f.role.accept(1, f.submit(b, 4, 1), 7, f.base, 4));  // older sequence: ignored
+  EXPECT_TRUE(
+      f.role.accept(1, f.submit(b, 4, 1), 7, f.base, 4, f.frame));  // older sequence: ignored
   const MergeOutcome o = f.role.merge(f.base, 4, 99, f.frame, {});
   ASSERT_EQ(o.record.merged.size(), 1u);
   EXPECT_EQ(o.record.merged[0].sequence, 2u);
   EXPECT_EQ(o.merged_strokes, 1u);
   EXPECT_TRUE(f.role.empty());  // merged submits are forgotten
-  EXPECT_THROW(f.role.accept(1, Bytes{1, 2, 3}, 1, f.base, 5), InvalidInput);
+  EXPECT_THROW(f.role.accept(1, Bytes{1, 2, 3}, 1, f.base, 5, f.frame), InvalidInput);
 }
 
 TEST(MergerRole, MergeMakesAVersionEveryReplicaAccepts) {
   Fixture f;
   const Diff a = stroke_diff(f.base, {0, 0, 1}, {0.2f, 0, 0}, true);
   const Diff b = stroke_diff(f.base, {0, 0, -1}, {0, 0.2f, 0});
-  ASSERT_TRUE(f.role.accept(10, f.submit(a, 0, 1), 3, f.base, 0));
-  ASSERT_TRUE(f.role.accept(20, f.submit(b, 0, 1), 4, f.base, 0));
+  ASSERT_TRUE(f.role.accept(10, f.submit(a, 0, 1), 3, f.base, 0, f.frame));
+  ASSERT_TRUE(f.role.accept(20, f.submit(b, 0, 1), 4, f.base, 0, f.frame));
   const MergeOutcome o = f.role.merge(f.base, 0, kGenesisChain, f.frame, {});
   const VersionRecord& r = o.record;
   EXPECT_EQ(r.version, 1u);
@@ -74,15 +95,16 @@ TEST(MergerRole, CountsConflictingStrokes) {
   const Diff a = stroke_diff(f.base, {0, 0, 1}, {0.2f, 0, 0});
   const Diff b = stroke_diff(f.base, {0, 0, 1}, {0, 0.2f, 0});
   const Diff c = stroke_diff(f.base, {0, 0, -1}, {0, 0.2f, 0});
-  f.role.accept(1, f.submit(a, 0, 1), 2, f.base, 0);
-  f.role.accept(2, f.submit(b, 0, 1), 3, f.base, 0);
-  f.role.accept(3, f.submit(c, 0, 1), 5, f.base, 0);
+  f.role.accept(1, f.submit(a, 0, 1), 2, f.base, 0, f.frame);
+  f.role.accept(2, f.submit(b, 0, 1), 3, f.base, 0, f.frame);
+  f.role.accept(3, f.submit(c, 0, 1), 5, f.base, 0, f.frame);
   EXPECT_EQ(f.role.merge(f.base, 0, kGenesisChain, f.frame, {}).record.conflicting, 5u);
 }
 
 TEST(MergerRole, ForgetsALeaversSubmit) {
   Fixture f;
-  f.role.accept(1, f.submit(stroke_diff(f.base, {0, 0, 1}, {0.2f, 0, 0}), 0, 1), 1, f.base, 0);
+  f.role.accept(1, f.submit(stroke_diff(f.base, {0, 0, 1}, {0.2f, 0, 0}), 0, 1), 1, f.base, 0,
+                f.frame);
   f.role.forget(1);
   EXPECT_TRUE(f.role.empty());
 }

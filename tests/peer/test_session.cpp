@@ -4,10 +4,13 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cmath>
+#include <limits>
 #include <thread>
 
 #include "csculpt/diff.h"
 #include "csculpt/error.h"
+#include "csculpt/merge.h"
 #include "csculpt/peer/session.h"
 #include "csculpt/testkit/generate.h"
 
@@ -130,6 +133,83 @@ TEST(Session, EditsMadeWhileAMergeIsInFlightAreRebasedNotLost) {
   }
   EXPECT_GT(near_plus, 0.02f);
   EXPECT_GT(near_minus, 0.02f);
+}
+
+// Issue 12, finding 4: one transient NaN in a host's arrays used to cut it off for good (the
+// versions taken before the failure were dropped, so it stayed at version 0 and its later
+// submits were never merged). Now the bad value is refused, naming the vertex, before anything
+// is taken; once repaired, the next calls work and nothing is lost.
+TEST(Session, ATransientNanIsRefusedAndTheHostCarriesOn) {
+  const Mesh sphere = make_sphere(2000, true);
+  Artist a{Session::create(sphere, fast_options(1)), sphere};
+  Artist b{Session::join(a.session->invite(), fast_options(2)), {}};
+  b.local = b.session->base();
+  apply_stroke(a.local, grab({0, 0, 1}, {0, 0, 1}, 0.4f, 0.2f));
+  a.session->submit(a.local, 1);
+  // a's stroke is merged and waits for b's update; b's host hands over a NaN meanwhile.
+  ASSERT_TRUE(run_until({&a}, [&] { return a.session->version() >= 1; }));
+  std::this_thread::sleep_for(100ms);
+  const float good = b.local.positions[3].x;
+  b.local.positions[3].x = std::nanf("");
+  for (const char* call : {"update", "submit"}) {
+    try {
+      if (std::string(call) == "update")
+        b.session->update(b.local);
+      else
+        b.session->submit(b.local, 1);
+      ADD_FAILURE() << call << " accepted a NaN";
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find("vertex 3"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("not finite"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(b.session->version(), 0u);
+  b.local.positions[3].x = good;
+  // b's own stroke after the repair is merged, and b holds a's.
+  apply_stroke(b.local, grab({0, 0, -1}, {0, 0, -1}, 0.4f, 0.2f));
+  b.session->submit(b.local, 1);
+  ASSERT_TRUE(run_until({&a, &b}, [&] {
+    return converged({&a, &b}) && b.session->stats().strokes_acknowledged == 1 &&
+           a.session->stats().strokes_acknowledged == 1;
+  }));
+  EXPECT_GE(b.session->version(), 2u);
+}
+
+// Finding 5: a vertex thrown 1e6 away used to move other artists' vertices by the merge's
+// rotations (140 units). The host refuses it with the bound; the other artist's stroke is
+// merged untouched.
+TEST(Session, APositionOutOfTheSessionsReachIsRefusedWithTheBound) {
+  const Mesh sphere = make_sphere(2000, true);
+  Artist a{Session::create(sphere, fast_options(1)), sphere};
+  Artist b{Session::join(a.session->invite(), fast_options(2)), {}};
+  b.local = b.session->base();
+  for (float far : {1e6f, 1e20f, 1e30f, -std::numeric_limits<float>::infinity()}) {
+    Mesh bad = b.local;
+    bad.positions[7].y = far;
+    try {
+      b.session->submit(bad, 1);
+      ADD_FAILURE() << far << " accepted";
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find("vertex 7"), std::string::npos) << e.what();
+    }
+  }
+  Mesh painted = b.local;  // a channel value outside its range too
+  painted.channels[0].values[5] = 3.f;
+  EXPECT_THROW(b.session->submit(painted, 1), InvalidInput);
+  // A legitimate long grab (ten diagonals) passes.
+  b.local.positions[7].y += 10 * MergeFrame::fit(sphere.positions).scale;
+  EXPECT_TRUE(b.session->submit(b.local, 1));
+  apply_stroke(a.local, grab({0, 0, 1}, {0, 0, 1}, 0.4f, 0.2f));
+  const Mesh a_alone = a.local;
+  a.session->submit(a.local, 1);
+  ASSERT_TRUE(run_until({&a, &b}, [&] {
+    return converged({&a, &b}) && a.session->stats().strokes_acknowledged == 1;
+  }));
+  float moved = 0;  // a's stroke, far from b's vertex 7, is as a made it (wire tolerance)
+  for (std::size_t v = 0; v < sphere.vertex_count(); ++v)
+    if (sphere.positions[v].z > 0.5f)
+      moved = std::max(moved, std::fabs(a.local.positions[v].z - a_alone.positions[v].z));
+  EXPECT_LT(moved, 1e-3f);
 }
 
 TEST(Session, LateJoinerGetsTheCurrentVersionAndMergerFailoverKeepsEdits) {
