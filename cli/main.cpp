@@ -280,7 +280,15 @@ int main(int argc, char** argv) {
   csculpt::cli::BenchSessionOptions bench_session_options;
   CLI::App* bench_session = csculpt::cli::add_bench_session_command(*bench, bench_session_options);
 
-  CLI11_PARSE(app, argc, argv);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help and --version are "errors" that exit 0; every real one gets the README's
+    // contract: one `csculpt: error:` line and exit 1, like a bad file found later.
+    if (e.get_exit_code() == 0) return app.exit(e);
+    std::fprintf(stderr, "csculpt: error: %s (csculpt --help for usage)\n", e.what());
+    return 1;
+  }
   try {
     if (*merge) return run_merge(mc);
     if (*inspect.hierarchy) return run_hierarchy(inspect.mesh_path, inspect.k);

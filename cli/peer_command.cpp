@@ -330,7 +330,12 @@ CLI::App* add_peer_command(CLI::App& app, PeerCommandOptions& o) {
       "peer",
       "one simulated artist in a serverless session, as its own process (JSON lines on stdout: "
       "invite, events, state changes, summary)");
-  p->add_option("--join", o.join, "invite of the session to join (else create one)");
+  p->add_option("--join", o.join, "invite of the session to join (else create one)")
+      ->check([](const std::string& invite) {
+        // An empty invite (an unset shell variable) used to create a new session silently.
+        return invite.empty() ? std::string("--join needs an invite (csculpt1:...@tcp://...)")
+                              : std::string();
+      });
   p->add_option("--faces", o.faces, "faces of the built-in sphere of a new session")
       ->capture_default_str()
       ->check(CLI::Range(20u, 50000000u));

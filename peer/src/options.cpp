@@ -1,6 +1,7 @@
 // SessionOptions checked by the layer that owns them: every way into a session (C++, the C ABI,
 // the CLI) gets the same clear errors.
 #include <cmath>
+#include <sstream>
 #include <string>
 
 #include "csculpt/error.h"
@@ -25,10 +26,11 @@ void check_interval(const char* name, Millis value) {
     bad(std::string(name) + " is " + ms(value) + "; it must be 1 ms to 1 hour");
 }
 
-void check_tolerance(const char* name, double value, double most) {
-  if (!std::isfinite(value) || value < 0 || value > most)
-    bad(std::string(name) + " is " + std::to_string(value) + "; it must be finite, 0 to " +
-        std::to_string(most));
+void check_tolerance(const char* name, double value, double most, const char* unit) {
+  if (std::isfinite(value) && value >= 0 && value <= most) return;
+  std::ostringstream m;
+  m << name << " is " << value << "; it must be 0 (lossless) to " << most << " (" << unit << ")";
+  bad(m.str());
 }
 
 }  // namespace
@@ -45,10 +47,14 @@ void validate_options(const SessionOptions& o) {
   if (!(m.heartbeat < m.evasive && m.evasive < m.expired))
     bad("membership needs heartbeat < evasive < expired (" + ms(m.heartbeat) + ", " +
         ms(m.evasive) + ", " + ms(m.expired) + ")");
-  // A fraction of the session's frame: above 1 a change the size of the mesh could vanish.
-  check_tolerance("wire.position_tolerance", o.wire.position_tolerance, 1.0);
-  check_tolerance("wire.channel_tolerance", o.wire.channel_tolerance, 1e30);
-  check_tolerance("wire.position_scale", o.wire.position_scale, 1e30);
+  // Coarser steps would erase strokes while the session counts them acknowledged: a stroke
+  // smaller than the step rounds to nothing on the wire.
+  check_tolerance("wire.position_tolerance", o.wire.position_tolerance, 0.01,
+                  "a fraction of the session's bounding-box diagonal");
+  check_tolerance("wire.channel_tolerance", o.wire.channel_tolerance, 0.05,
+                  "in the channel's stored units; an 8-bit colour step is 0.004");
+  check_tolerance("wire.position_scale", o.wire.position_scale, 1e30,
+                  "the length the position tolerance is a fraction of; 0: the diagonal");
   if (o.max_message_bytes < (std::size_t{64} << 10))
     bad("max_message_bytes is " + std::to_string(o.max_message_bytes) + "; at least 65536");
   // Every chunk travels in one message with its envelope (well under 4 KiB).

@@ -1,5 +1,10 @@
 #include "transport.h"
 
+#include <arpa/inet.h>
+#include <ifaddrs.h>
+#include <net/if.h>
+#include <netinet/in.h>
+
 #include <fcntl.h>
 #include <unistd.h>
 #include <zmq.h>
@@ -9,6 +14,39 @@
 #include "csculpt/error.h"
 
 namespace csculpt::peer {
+namespace {
+
+/// The first IPv4 address of an interface that is up and not the loopback, or 127.0.0.1.
+std::string primary_ipv4() {
+  ifaddrs* list = nullptr;
+  std::string found = "127.0.0.1";
+  if (::getifaddrs(&list) != 0) return found;
+  for (const ifaddrs* a = list; a; a = a->ifa_next) {
+    if (!a->ifa_addr || a->ifa_addr->sa_family != AF_INET || !(a->ifa_flags & IFF_UP) ||
+        (a->ifa_flags & IFF_LOOPBACK))
+      continue;
+    char text[INET_ADDRSTRLEN] = {};
+    const auto* in = reinterpret_cast<const sockaddr_in*>(a->ifa_addr);
+    if (::inet_ntop(AF_INET, &in->sin_addr, text, sizeof text)) {
+      found = text;
+      break;
+    }
+  }
+  ::freeifaddrs(list);
+  return found;
+}
+
+}  // namespace
+
+/// A socket bound to every interface ("tcp://0.0.0.0:port", what "tcp://*:port" reports) is
+/// reached through one of them: the invite and the membership gossip carry that address, not
+/// 0.0.0.0, which a joiner on another machine cannot connect to.
+std::string advertised_endpoint(const std::string& bound) {
+  const std::string wildcard = "tcp://0.0.0.0:";
+  if (bound.rfind(wildcard, 0) != 0) return bound;
+  return "tcp://" + primary_ipv4() + ":" + bound.substr(wildcard.size());
+}
+
 namespace {
 
 constexpr const char* kZapEndpoint = "inproc://zeromq.zap.01";
@@ -100,7 +138,7 @@ Transport::Transport(const Invite& invite, PeerId self, const std::string& bind,
     router_.set(zmq::sockopt::linger, 0);
     router_.set(zmq::sockopt::rcvhwm, 100000);
     router_.bind(bind);
-    endpoint_ = router_.get(zmq::sockopt::last_endpoint);
+    endpoint_ = advertised_endpoint(router_.get(zmq::sockopt::last_endpoint));
   } catch (const zmq::error_t& e) {
     for (int fd : wake_pipe_) ::close(fd);
     fail("binding the session's socket to '" + bind + "'", e);

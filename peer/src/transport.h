@@ -38,6 +38,10 @@ struct ZapDecision {
 };
 ZapDecision decide_zap(const std::vector<std::string>& request, const CurveKey& client_public);
 
+/// The endpoint others reach a socket bound at `bound` (ZMQ_LAST_ENDPOINT) by: a wildcard
+/// address ("tcp://0.0.0.0:port") becomes this machine's first non-loopback IPv4 address.
+std::string advertised_endpoint(const std::string& bound);
+
 /// Options of a DEALER made by curve_dealer.
 struct DealerOptions {
   const RoutingId* routing_id = nullptr;  ///< none: libzmq picks one

@@ -149,18 +149,31 @@ DiffStats diff_stats(const Diff& diff, const Mesh& base) {
   return s;
 }
 
+namespace {
+
+/// A JSON number, or null where the value overflowed (JSON has no inf or nan: a mesh with
+/// coordinates near FLT_MAX has an infinite bounding-box diagonal).
+struct JsonNumber {
+  double value;
+  friend std::ostream& operator<<(std::ostream& o, JsonNumber n) {
+    return std::isfinite(n.value) ? o << n.value : o << "null";
+  }
+};
+
+}  // namespace
+
 std::string to_json(const DiffStats& s) {
   std::ostringstream o;
   o.precision(6);
   o << "{\"vertices\":" << s.vertices << ",\"position_changes\":" << s.position_changes
-    << ",\"edited_fraction\":" << s.edited_fraction
-    << ",\"max_displacement\":" << s.max_displacement
-    << ",\"rms_displacement\":" << s.rms_displacement << ",\"bbox_diagonal\":" << s.bbox_diagonal
-    << ",\"channels\":[";
+    << ",\"edited_fraction\":" << JsonNumber{s.edited_fraction}
+    << ",\"max_displacement\":" << JsonNumber{s.max_displacement}
+    << ",\"rms_displacement\":" << JsonNumber{s.rms_displacement}
+    << ",\"bbox_diagonal\":" << JsonNumber{s.bbox_diagonal} << ",\"channels\":[";
   for (std::size_t i = 0; i < s.channels.size(); ++i)
     o << (i ? "," : "") << "{\"name\":\"" << s.channels[i].name
       << "\",\"changes\":" << s.channels[i].changes
-      << ",\"max_change\":" << s.channels[i].max_change << "}";
+      << ",\"max_change\":" << JsonNumber{s.channels[i].max_change} << "}";
   o << "]}";
   return o.str();
 }

@@ -385,7 +385,10 @@ TEST_F(Cli, MissingFilesAreArgumentErrors) {
             quote(out),
         "hierarchy " + quote(missing), "diff " + quote(base_path) + " " + quote(missing)}) {
     const Result r = run(args);
-    EXPECT_NE(r.code, 0) << args;
+    // Issue 12, finding 8: CLI11's own exit code (105) and wording broke the README's contract.
+    EXPECT_EQ(r.code, 1) << args;
+    EXPECT_EQ(lines_of(r.err).size(), 1u) << args << ": " << r.err;
+    EXPECT_EQ(r.err.rfind("csculpt: error: ", 0), 0u) << args << ": " << r.err;
     EXPECT_TRUE(r.out.empty()) << args << ": " << r.out;
     EXPECT_TRUE(contains_ci(r.err, missing) || contains_ci(r.err, dir_.string()))
         << args << ": " << r.err;
@@ -469,6 +472,29 @@ TEST_F(Cli, HierarchyAndDiffPrintOneJsonObject) {
   const std::string other = write(make_sphere(2000), "other.ply");
   expect_error(run("diff " + quote(base) + " " + quote(other)), (dir_ / "out").string(), other,
                {"vertices", "vertex count"}, "diff of another mesh");
+}
+
+// Issue 12, finding 8: a mesh with coordinates near FLT_MAX made `diff` print `inf`, which is
+// not JSON; the overflowed numbers are null now and the line parses.
+TEST_F(Cli, DiffOfAHugeMeshIsStillJson) {
+  Mesh base = make_sphere(320);
+  base.positions[0] = {3e38f, -3e38f, 3e38f};
+  Mesh edited = base;
+  edited.positions[5].x += 1.f;
+  const Result d =
+      run("diff " + quote(write(base, "huge.ply")) + " " + quote(write(edited, "huge_edit.ply")));
+  expect_one_json_line(d, "diff of a huge mesh");
+  const test::Json j = test::JsonParser::parse(lines_of(d.out).at(0));
+  EXPECT_EQ(j["bbox_diagonal"].type, test::Json::Type::null) << d.out;
+  EXPECT_EQ(j["position_changes"].number, 1.0) << d.out;
+}
+
+// An empty invite (an unset shell variable) used to start a new session silently.
+TEST_F(Cli, PeerRefusesAnEmptyInvite) {
+  const Result r = run("peer --join \"\" --seconds 1");
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("--join needs an invite"), std::string::npos) << r.err;
+  EXPECT_EQ(r.out.find("\"invite\""), std::string::npos) << r.out;
 }
 
 TEST_F(Cli, ScenariosJsonHasOneObjectPerScenarioAndMethod) {

@@ -5,8 +5,8 @@
 #include <functional>
 
 #include "csculpt/error.h"
-#include "csculpt/testkit/generate.h"
 #include "csculpt/peer/session.h"
+#include "csculpt/testkit/generate.h"
 
 namespace {
 
@@ -65,6 +65,14 @@ TEST(SessionOptions, RefusesNegativeNonFiniteOrAbsurdTolerances) {
                        "wire.channel_tolerance"));
   EXPECT_TRUE(mentions(refusal([](SessionOptions& o) { o.wire.position_scale = -2; }),
                        "wire.position_scale"));
+  // Issue 12, finding 8: steps so coarse that strokes round to nothing on the wire (and are
+  // still counted acknowledged) are refused, with the range in words.
+  EXPECT_TRUE(mentions(refusal([](SessionOptions& o) { o.wire.position_tolerance = 1e30; }),
+                       "must be 0 (lossless) to 0.01 (a fraction of the session's bounding-box"));
+  EXPECT_TRUE(mentions(refusal([](SessionOptions& o) { o.wire.position_tolerance = 0.5; }),
+                       "wire.position_tolerance is 0.5"));
+  EXPECT_TRUE(mentions(refusal([](SessionOptions& o) { o.wire.channel_tolerance = 1e30; }),
+                       "in the channel's stored units"));
 }
 
 TEST(SessionOptions, RefusesSizesThatCannotCarryASnapshotAndLongNames) {

@@ -212,6 +212,19 @@ TEST(Session, APositionOutOfTheSessionsReachIsRefusedWithTheBound) {
   EXPECT_LT(moved, 1e-3f);
 }
 
+// Issue 12, finding 8: a session bound to every interface printed an invite with 0.0.0.0,
+// which nobody on another machine can connect to; it carries a real address now.
+TEST(Session, AnInviteOfASessionBoundToEveryInterfaceCarriesARealAddress) {
+  SessionOptions o = fast_options(1);
+  o.bind = "tcp://*:*";
+  Artist a{Session::create(make_sphere(320, true), o), {}};
+  const std::string invite = a.session->invite();
+  EXPECT_EQ(invite.find("0.0.0.0"), std::string::npos) << invite;
+  EXPECT_EQ(parse_invite(invite).endpoint, a.session->endpoint());
+  Artist b{Session::join(invite, fast_options(2), Millis{10000}), {}};
+  EXPECT_EQ(mesh_digest(b.session->base()), mesh_digest(a.session->base()));
+}
+
 TEST(Session, LateJoinerGetsTheCurrentVersionAndMergerFailoverKeepsEdits) {
   const Mesh sphere = make_sphere(3000);
   Artist a{Session::create(sphere, fast_options(1)), sphere};
