@@ -1436,31 +1436,32 @@ class Session(_Handle):
         p.position[:] = [x, y, z]
         _lib.csc_session_set_presence(self._ptr, ctypes.byref(p))
 
+    def _snapshot(self, count_function, get_function, struct):
+        """Takes a snapshot with `count_function` and reads each entry into a new `struct`."""
+        count = c_uint32()
+        count_function(self._ptr, ctypes.byref(count))
+        entries = [struct() for _ in range(count.value)]
+        for i, entry in enumerate(entries):
+            get_function(self._ptr, i, ctypes.byref(entry))
+        return entries
+
     def presence(self) -> list:
         """The other peers' cursors (a list of Presence)."""
-        count = c_uint32()
-        _lib.csc_session_presence_count(self._ptr, ctypes.byref(count))
-        result = []
-        for i in range(count.value):
-            p = csc_presence()
-            _lib.csc_session_get_presence(self._ptr, i, ctypes.byref(p))
-            result.append(Presence(p.peer, tuple(p.position), p.radius, bool(p.active),
-                                   bool(p.visible), p.rgba, p.age_ms, tuple(p.colour)))
-        return result
+        return [Presence(p.peer, tuple(p.position), p.radius, bool(p.active), bool(p.visible),
+                         p.rgba, p.age_ms, tuple(p.colour))
+                for p in self._snapshot(_lib.csc_session_presence_count,
+                                        _lib.csc_session_get_presence, csc_presence)]
 
     def peers(self) -> list:
         """The other peers (a list of PeerInfo): members, then the latest that left."""
-        count = c_uint32()
-        _lib.csc_session_peer_count(self._ptr, ctypes.byref(count))
         result = []
-        for i in range(count.value):
-            p = csc_peer_info()
-            _lib.csc_session_get_peer(self._ptr, i, ctypes.byref(p))
+        # Names are borrowed until the next peer_count: decoded (copied) before that.
+        for p in self._snapshot(_lib.csc_session_peer_count, _lib.csc_session_get_peer,
+                                csc_peer_info):
             try:
                 state = PeerState(p.state)
             except ValueError:
                 state = p.state
-            # The name is borrowed until the next peer_count: decode (copy) it now.
             result.append(PeerInfo(p.id, (p.name or b"").decode("utf-8", "replace"), state,
                                    bool(p.merger), p.version, p.latency_ms))
         return result

@@ -51,6 +51,16 @@ const T& entry(const std::vector<T>& snapshot, uint32_t index, const char* count
   return snapshot[index];
 }
 
+/// A *_count call: `take(handle)` refreshes one of the handle's snapshots and gives its size.
+template <class Take>
+csc_status take_snapshot(const char* function, csc_session* session, uint32_t* count, Take&& take) {
+  return guarded(function, [&] {
+    csc_session& h = handle(session, Tag::session, "session");
+    require_pointer(count, "count");
+    *count = static_cast<uint32_t>(take(h));
+  });
+}
+
 }  // namespace
 
 extern "C" {
@@ -64,11 +74,9 @@ CSC_API csc_status csc_session_set_presence(csc_session* session, const csc_pres
 }
 
 CSC_API csc_status csc_session_presence_count(csc_session* session, uint32_t* count) {
-  return guarded("csc_session_presence_count", [&] {
-    csc_session& h = handle(session, Tag::session, "session");
-    require_pointer(count, "count");
+  return take_snapshot("csc_session_presence_count", session, count, [](csc_session& h) {
     h.presence = h.session->presence();
-    *count = static_cast<uint32_t>(h.presence.size());
+    return h.presence.size();
   });
 }
 
@@ -82,11 +90,9 @@ CSC_API csc_status csc_session_get_presence(const csc_session* session, uint32_t
 }
 
 CSC_API csc_status csc_session_peer_count(csc_session* session, uint32_t* count) {
-  return guarded("csc_session_peer_count", [&] {
-    csc_session& h = handle(session, Tag::session, "session");
-    require_pointer(count, "count");
+  return take_snapshot("csc_session_peer_count", session, count, [](csc_session& h) {
     h.peers = h.session->peers();
-    *count = static_cast<uint32_t>(h.peers.size());
+    return h.peers.size();
   });
 }
 
