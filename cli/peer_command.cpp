@@ -143,6 +143,8 @@ std::string_view kind_name(peer::EventKind k) {
       return "dropped";
     case peer::EventKind::error:
       return "error";
+    case peer::EventKind::peer_live:
+      return "peer_live";
   }
   return "unknown";
 }

@@ -197,6 +197,7 @@ void App::session_tick() {
   }
   if (!session_.active()) return;
   session_.poll_events();
+  send_presence();
   if (drag_ == Drag::stroke) return;  // remote versions land between strokes, never inside one
   csc_vertex_arrays local = document_.vertex_arrays();
   bool written = false;
@@ -218,11 +219,13 @@ void App::render(bool with_ui) {
   if (width > 0 && height > 0)
     renderer_.draw(camera_.view(), camera_.projection(float(width) / float(height)), view_);
   panel_rects_.clear();
-  if (!with_ui) return;
+  // The others' cursors belong to the scene: drawn with the panels hidden too.
+  if (!with_ui && !session_.active()) return;
   ImGui_ImplOpenGL3_NewFrame();
   ImGui_ImplGlfw_NewFrame();
   ImGui::NewFrame();
-  draw_panels();
+  if (with_ui) draw_panels();
+  if (session_.active()) draw_remote_cursors();
   ImGui::Render();
   ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
 }
@@ -272,11 +275,12 @@ void App::finish() {
   if (!options_.save_path.empty() && !document_.save(options_.save_path, error)) report(error);
   if (session_.active()) {  // for scripts: where this peer's session stood when it quit
     const csc_session_stats& stats = session_.stats();
-    std::printf("SESSION id=%016llx merger=%016llx version=%llu members=%u submitted=%llu acknowledged=%llu\n",
+    std::printf("SESSION id=%016llx merger=%016llx version=%llu members=%u submitted=%llu acknowledged=%llu "
+                "presence=%zu\n",
                 static_cast<unsigned long long>(session_.id()), static_cast<unsigned long long>(stats.merger),
                 static_cast<unsigned long long>(session_.version()), stats.members,
                 static_cast<unsigned long long>(stats.strokes_submitted),
-                static_cast<unsigned long long>(stats.strokes_acknowledged));
+                static_cast<unsigned long long>(stats.strokes_acknowledged), session_.presence_seen());
     std::fflush(stdout);
   }
   session_.leave();

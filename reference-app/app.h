@@ -1,7 +1,7 @@
 // The app: a GLFW window with the mesh document, the brushes, the panels and a session.
 // app.cpp: start-up, the main loop, rendering and the session's per-frame work;
 // app_input.cpp: mouse and keys (strokes, camera, shortcuts); panels.cpp: the ImGui panels;
-// bench.cpp: --bench-frames.
+// cursors.cpp: presence (this artist's cursor out, the others' drawn); bench.cpp: --bench-frames.
 #pragma once
 
 #include <GLFW/glfw3.h>
@@ -77,6 +77,10 @@ class App final : public InputHandlers {
   void draw_tool_panel();
   void draw_session_panel();
   void draw_brush_cursor();
+  // cursors.cpp
+  void send_presence();
+  bool surface_normal(glm::vec3 point, float radius, glm::vec3& normal) const;
+  void draw_remote_cursors();
   // bench.cpp
   int run_bench();
 

@@ -27,6 +27,16 @@ const char* peer_state_name(SessionLink::PeerState state) {
   return "?";
 }
 
+// Two lines a peer: name and id; state, merger, version and round trip.
+void draw_peer(const SessionLink::Peer& peer) {
+  char latency[32] = "-";
+  if (peer.latency_ms >= 0) std::snprintf(latency, sizeof latency, "%.1f ms", peer.latency_ms);
+  ImGui::BulletText("%s  %016llx", peer.name.empty() ? "?" : peer.name.c_str(),
+                    static_cast<unsigned long long>(peer.id));
+  ImGui::Text("    %s%s  version %llu  rtt %s", peer_state_name(peer.state), peer.merger ? " (merger)" : "",
+              static_cast<unsigned long long>(peer.version), latency);
+}
+
 }  // namespace
 
 void App::draw_panels() {
@@ -160,8 +170,7 @@ void App::draw_session_panel() {
                 static_cast<unsigned long long>(stats.strokes_acknowledged));
     ImGui::Text("sent %.1f KB  merges %llu (%.1f ms)", double(stats.submit_bytes) / 1024.0,
                 static_cast<unsigned long long>(stats.merges), stats.merge_ms_mean);
-    for (const SessionLink::Peer& peer : session_.peers())
-      ImGui::BulletText("%016llx  %s", static_cast<unsigned long long>(peer.id), peer_state_name(peer.state));
+    for (const SessionLink::Peer& peer : session_.peers()) draw_peer(peer);
     bool attribution = attribution_view_;
     if (ImGui::Checkbox("Attribution view (A)", &attribution)) toggle_attribution_view();
   }

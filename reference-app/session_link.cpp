@@ -6,6 +6,9 @@
 namespace {
 
 constexpr size_t kMaxMessages = 8;
+// A cursor not heard of for this long is hidden (its sender resends every second while it
+// hovers, so this is a stalled or departed peer).
+constexpr uint32_t kStaleCursorMs = 2000;
 
 std::string abi_error(const char* what, csc_status status) {
   return std::string(what) + ": " + csc_status_str(status) + ": " + csc_last_error();
@@ -82,8 +85,45 @@ void SessionLink::note(std::string message) {
 
 void SessionLink::set_peer(uint64_t id, PeerState state) {
   auto it = std::find_if(peers_.begin(), peers_.end(), [&](const Peer& p) { return p.id == id; });
-  if (it == peers_.end()) peers_.push_back({id, state});
+  if (it == peers_.end()) peers_.push_back({id, state, "", false, 0, -1});
   else it->state = state;
+}
+
+// The library's list is the truth (names, merger, versions, round trips); the events above
+// only make a change show in the same frame.
+void SessionLink::refresh_peers() {
+  uint32_t count = 0;
+  if (csc_session_peer_count(session_, &count) != CSC_OK) return;
+  peers_.clear();
+  for (uint32_t i = 0; i < count; ++i) {
+    csc_peer_info info = CSC_PEER_INFO_INIT;
+    if (csc_session_get_peer(session_, i, &info) != CSC_OK) continue;
+    const PeerState state = info.state == CSC_PEER_LEFT      ? PeerState::left
+                            : info.state == CSC_PEER_EVASIVE ? PeerState::evasive
+                                                             : PeerState::live;
+    peers_.push_back({info.id, state, info.name ? info.name : "", info.merger != 0, info.version,
+                      info.latency_ms});
+  }
+}
+
+void SessionLink::refresh_cursors() {
+  uint32_t count = 0;
+  cursors_.clear();
+  if (csc_session_presence_count(session_, &count) != CSC_OK) return;
+  for (uint32_t i = 0; i < count; ++i) {
+    csc_presence p = CSC_PRESENCE_INIT;
+    if (csc_session_get_presence(session_, i, &p) != CSC_OK || !p.visible || p.age_ms > kStaleCursorMs)
+      continue;
+    presence_seen_.insert(p.peer);
+    cursors_.push_back({p.peer, {p.position[0], p.position[1], p.position[2]}, p.radius, p.active != 0,
+                        {p.colour[0], p.colour[1], p.colour[2]}});
+  }
+}
+
+void SessionLink::set_presence(const csc_presence& presence) {
+  if (!session_) return;
+  if (csc_status s = csc_session_set_presence(session_, &presence); s != CSC_OK)
+    note(abi_error("cannot send the cursor", s));
 }
 
 void SessionLink::poll_events() {
@@ -100,6 +140,7 @@ void SessionLink::poll_events() {
       case CSC_EVENT_PEER_JOINED: set_peer(event.peer, PeerState::live); note(std::string("peer ") + id + " joined"); break;
       case CSC_EVENT_PEER_EVASIVE: set_peer(event.peer, PeerState::evasive); note(std::string("peer ") + id + " is silent"); break;
       case CSC_EVENT_PEER_LEFT: set_peer(event.peer, PeerState::left); note(std::string("peer ") + id + " left"); break;
+      case CSC_EVENT_PEER_LIVE: set_peer(event.peer, PeerState::live); note(std::string("peer ") + id + " is back"); break;
       case CSC_EVENT_MERGER_CHANGED: note(std::string("peer ") + id + " merges now"); break;
       case CSC_EVENT_DROPPED: note(std::string("dropped a message: ") + (event.message ? event.message : "")); break;
       case CSC_EVENT_ERROR:
@@ -110,6 +151,8 @@ void SessionLink::poll_events() {
     }
   }
   csc_session_get_stats(session_, &stats_);
+  refresh_peers();
+  refresh_cursors();
 }
 
 uint32_t SessionLink::update(csc_vertex_arrays& local) {
@@ -174,6 +217,7 @@ void SessionLink::leave() {
   csc_session_destroy(session_);
   session_ = nullptr;
   peers_.clear();
+  cursors_.clear();
   status_ = "left the session";
   note("left the session; the mesh is yours to keep");
 }

@@ -5,9 +5,11 @@
 
 #include <csculpt.h>
 
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <future>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -17,6 +19,18 @@ class SessionLink {
   struct Peer {
     uint64_t id;
     PeerState state;
+    std::string name;
+    bool merger = false;
+    uint64_t version = 0;
+    double latency_ms = -1;  // negative until measured
+  };
+  /** Another artist's brush cursor, recent and over the mesh. */
+  struct Cursor {
+    uint64_t peer;
+    std::array<float, 3> position;  // mesh coordinates
+    float radius;                   // mesh units
+    bool active;                    // a stroke under way
+    std::array<float, 3> colour;    // RGB in [0,1]
   };
 
   SessionLink() = default;
@@ -34,8 +48,10 @@ class SessionLink {
   bool joining() const { return join_.valid(); }
   bool active() const { return session_ != nullptr; }
 
-  /** Takes the session's events (peers, versions, errors). */
+  /** Takes the session's events (peers, versions, errors), the peer list and the cursors. */
   void poll_events();
+  /** This artist's brush cursor (every frame: the library sends at most 20 a second). */
+  void set_presence(const csc_presence& presence);
   /** True once a merged version waits for update(). */
   bool version_pending() const { return version_pending_; }
   /** Applies merged versions into `local` (rebased in place); returns versions applied. */
@@ -60,6 +76,9 @@ class SessionLink {
   uint64_t version() const { return csc_session_version(session_); }
   const csc_session_stats& stats() const { return stats_; }
   const std::vector<Peer>& peers() const { return peers_; }
+  const std::vector<Cursor>& cursors() const { return cursors_; }
+  /** How many peers' cursors were seen over the mesh during the session (the exit line). */
+  size_t presence_seen() const { return presence_seen_.size(); }
   const std::vector<std::string>& messages() const { return messages_; }
   const std::string& status() const { return status_; }
   bool attribution_colours(std::vector<float>& rgb, uint32_t vertex_count) const;
@@ -67,6 +86,8 @@ class SessionLink {
  private:
   void note(std::string message);
   void set_peer(uint64_t id, PeerState state);
+  void refresh_peers();
+  void refresh_cursors();
 
   csc_session* session_ = nullptr;
   csc_session_options options_ = CSC_SESSION_OPTIONS_INIT;
@@ -76,6 +97,8 @@ class SessionLink {
   };
   std::future<JoinResult> join_;
   std::vector<Peer> peers_;
+  std::vector<Cursor> cursors_;
+  std::set<uint64_t> presence_seen_;
   std::vector<std::string> messages_;  // the latest few, newest last
   std::string status_ = "not in a session";
   csc_session_stats stats_ = CSC_SESSION_STATS_INIT;

@@ -545,6 +545,7 @@ typedef enum csc_event_kind {
   CSC_EVENT_MERGER_CHANGED = 5, /**< `peer` merges from `epoch` on */
   CSC_EVENT_DROPPED = 6,        /**< a malformed or hostile message was dropped (`message`) */
   CSC_EVENT_ERROR = 7,          /**< the network thread met an error (`message`) */
+  CSC_EVENT_PEER_LIVE = 8,      /**< `peer`, reported evasive, was heard again */
   CSC_EVENT_KIND_MAX_ENUM = 0x7FFFFFFF
 } csc_event_kind;
 
@@ -596,6 +597,75 @@ CSC_API csc_status csc_session_get_stats(const csc_session* session, csc_session
  *  light grey where nobody did (the paper's Fig. 1/6). */
 CSC_API csc_status csc_session_attribution_colors(const csc_session* session, float* rgb,
                                                   uint32_t vertex_count);
+
+/* ---- Sessions: presence and peers --------------------------------------------------------
+ *
+ * Presence: every artist sees the others' brush cursors live. The host sets its cursor as often
+ * as it likes (every frame); the network thread sends the latest to every member at most 20
+ * times a second while it changes, and again every second. Presence is not merged or versioned.
+ * The others' cursors and the peer list are read as snapshots: a *_count call takes one, the
+ * matching get reads entry `index` (0 to count - 1) of it. */
+
+/** A brush cursor. csc_session_set_presence reads position, radius, active, visible and rgba;
+ *  csc_session_get_presence fills every field. */
+typedef struct csc_presence {
+  uint32_t struct_size;
+  uint64_t peer;     /**< whose (get only) */
+  float position[3]; /**< in the session mesh's coordinates; finite */
+  float radius;      /**< brush radius in mesh units; finite, at least 0 */
+  int32_t active;    /**< 1 while a stroke is under way */
+  int32_t visible;   /**< 1 while the cursor is over the mesh */
+  /** 0xRRGGBBAA the sender asks to be drawn in; 0 (alpha 0): the receivers choose. */
+  uint32_t rgba;
+  uint32_t age_ms; /**< since it arrived (get only); hide a cursor not heard of for a while */
+  /** What to draw it in, RGB in [0,1] (get only): its rgba if it gave one, else the colour the
+   *  attribution view gives that peer (csc_session_attribution_colors). */
+  float colour[3];
+} csc_presence;
+#define CSC_PRESENCE_INIT                                        \
+  {                                                              \
+    sizeof(csc_presence), 0, {0.f, 0.f, 0.f}, 0.f, 0, 0, 0, 0, { \
+      0.f, 0.f, 0.f                                              \
+    }                                                            \
+  }
+
+/** Sets this peer's brush cursor. Fails with CSC_ERROR_INVALID_ARGUMENT naming the field for a
+ *  non-finite position or radius or a negative radius. Never waits on the network. */
+CSC_API csc_status csc_session_set_presence(csc_session* session, const csc_presence* presence);
+/** Takes a snapshot of the other peers' cursors (members only: a peer that left or expired has
+ *  none) and gives their number. */
+CSC_API csc_status csc_session_presence_count(csc_session* session, uint32_t* count);
+/** Entry `index` of the last csc_session_presence_count snapshot. */
+CSC_API csc_status csc_session_get_presence(const csc_session* session, uint32_t index,
+                                            csc_presence* out);
+
+typedef enum csc_peer_state {
+  CSC_PEER_LIVE = 0,
+  CSC_PEER_EVASIVE = 1, /**< silent past the evasive threshold (CSC_EVENT_PEER_EVASIVE) */
+  CSC_PEER_LEFT = 2,    /**< left or expired (the latest 16 are listed) */
+  CSC_PEER_STATE_MAX_ENUM = 0x7FFFFFFF
+} csc_peer_state;
+
+/** Another peer of the session, as this one sees it. */
+typedef struct csc_peer_info {
+  uint32_t struct_size;
+  uint64_t id;
+  const char* name; /**< its `name` option; borrowed until the next csc_session_peer_count */
+  csc_peer_state state;
+  int32_t merger;   /**< 1 if it is the merger this peer follows */
+  uint64_t version; /**< the agreed version its last heartbeat reported */
+  /** Round trip in ms (heartbeat echoes, smoothed); negative until measured. */
+  double latency_ms;
+} csc_peer_info;
+#define CSC_PEER_INFO_INIT \
+  { sizeof(csc_peer_info), 0, NULL, CSC_PEER_LIVE, 0, 0, -1.0 }
+
+/** Takes a snapshot of the other peers (members, then the latest that left) and gives their
+ *  number. */
+CSC_API csc_status csc_session_peer_count(csc_session* session, uint32_t* count);
+/** Entry `index` of the last csc_session_peer_count snapshot. */
+CSC_API csc_status csc_session_get_peer(const csc_session* session, uint32_t index,
+                                        csc_peer_info* out);
 
 #ifdef __cplusplus
 } /* extern "C" */

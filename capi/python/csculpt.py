@@ -55,7 +55,7 @@ __all__ = [
     "InvalidArgument", "InvalidInput", "IoError", "UnknownBaseVersion", "OutOfMemory",
     "InternalError", "Mesh", "Channel", "Hierarchy", "HierarchyStats", "Diff", "DiffInfo",
     "MessageInfo", "Tolerances", "LOSSLESS", "Merger", "MergeTimings", "EventKind", "Session",
-    "SessionEvent", "SessionStats", "SESSION_OPTIONS", "peek", "version",
+    "SessionEvent", "SessionStats", "SESSION_OPTIONS", "PeerState", "Presence", "PeerInfo", "peek", "version",
     "version_string", "wire_protocol_version", "merge_method_names", "check_version",
     "library_path"
 ]
@@ -107,7 +107,15 @@ class EventKind(enum.IntEnum):
     MERGER_CHANGED = 5
     DROPPED = 6
     ERROR = 7
+    PEER_LIVE = 8
     KIND_MAX_ENUM = 0x7FFFFFFF
+
+
+class PeerState(enum.IntEnum):
+    LIVE = 0
+    EVASIVE = 1
+    LEFT = 2
+    STATE_MAX_ENUM = 0x7FFFFFFF
 
 
 # ---- Structs (mirrors of the header's, named as in C) --------------------------------------
@@ -244,6 +252,19 @@ class csc_session_stats(_Sized):
                 ("stale_ignored", c_uint64), ("auth_rejected", c_uint64)]
 
 
+class csc_presence(_Sized):
+    _fields_ = [("struct_size", c_uint32), ("peer", c_uint64), ("position", c_float * 3),
+                ("radius", c_float), ("active", c_int32), ("visible", c_int32),
+                ("rgba", c_uint32), ("age_ms", c_uint32), ("colour", c_float * 3)]
+
+
+class csc_peer_info(_Sized):
+    _fields_ = [("struct_size", c_uint32), ("id", c_uint64), ("name", c_char_p),
+                ("state", _c_enum), ("merger", c_int32), ("version", c_uint64),
+                ("latency_ms", c_double)]
+    _defaults_ = {"latency_ms": -1.0}
+
+
 # ---- Errors --------------------------------------------------------------------------------
 
 
@@ -374,6 +395,11 @@ PROTOTYPES = {
     "csc_session_poll": (_STATUS, [_SessionP, POINTER(csc_session_event), POINTER(c_int32)]),
     "csc_session_get_stats": (_STATUS, [_SessionP, POINTER(csc_session_stats)]),
     "csc_session_attribution_colors": (_STATUS, [_SessionP, _FloatP, c_uint32]),
+    "csc_session_set_presence": (_STATUS, [_SessionP, POINTER(csc_presence)]),
+    "csc_session_presence_count": (_STATUS, [_SessionP, _U32P]),
+    "csc_session_get_presence": (_STATUS, [_SessionP, c_uint32, POINTER(csc_presence)]),
+    "csc_session_peer_count": (_STATUS, [_SessionP, _U32P]),
+    "csc_session_get_peer": (_STATUS, [_SessionP, c_uint32, POINTER(csc_peer_info)]),
 }
 
 # ---- Loading -------------------------------------------------------------------------------
@@ -1221,6 +1247,33 @@ class SessionStats:
     auth_rejected: int
 
 
+@dataclasses.dataclass(frozen=True)
+class Presence:
+    """Another artist's brush cursor (csc_presence): where it is (mesh coordinates), its radius
+    (mesh units), whether a stroke is under way and whether it is over the mesh, how long ago it
+    came, and the colour to draw it in (RGB in [0, 1])."""
+    peer: int
+    position: Tuple[float, float, float]
+    radius: float
+    active: bool
+    visible: bool
+    rgba: int
+    age_ms: int
+    colour: Tuple[float, float, float]
+
+
+@dataclasses.dataclass(frozen=True)
+class PeerInfo:
+    """Another peer as this one sees it (csc_peer_info); latency_ms is negative until
+    measured."""
+    id: int
+    name: str
+    state: Union[PeerState, int]
+    merger: bool
+    version: int
+    latency_ms: float
+
+
 class Session(_Handle):
     """A serverless editing session over ZeroMQ (csc_session): this peer's share of the
     agreed mesh and its link to the others. Networking runs on the library's own thread; no
@@ -1416,6 +1469,48 @@ class Session(_Handle):
         rgb = np.empty((self._vertex_count, 3), dtype=np.float32)
         _lib.csc_session_attribution_colors(self._ptr, _fp(rgb), self._vertex_count)
         return rgb
+
+    def set_presence(self, position, radius: float, active: bool = False,
+                     visible: bool = True, rgba: int = 0) -> None:
+        """Sets this peer's brush cursor (as often as you like: the library sends at most 20
+        a second). position: 3 floats in mesh coordinates; radius in mesh units; rgba
+        0xRRGGBBAA, or 0 to let the others choose. Raises InvalidArgument naming a non-finite
+        or negative value."""
+        x, y, z = (float(c) for c in position)
+        p = csc_presence(radius=float(radius), active=int(bool(active)),
+                         visible=int(bool(visible)), rgba=int(rgba))
+        p.position[:] = [x, y, z]
+        _lib.csc_session_set_presence(self._ptr, ctypes.byref(p))
+
+    def _snapshot(self, count_function, get_function, struct):
+        """Takes a snapshot with `count_function` and reads each entry into a new `struct`."""
+        count = c_uint32()
+        count_function(self._ptr, ctypes.byref(count))
+        entries = [struct() for _ in range(count.value)]
+        for i, entry in enumerate(entries):
+            get_function(self._ptr, i, ctypes.byref(entry))
+        return entries
+
+    def presence(self) -> list:
+        """The other peers' cursors (a list of Presence)."""
+        return [Presence(p.peer, tuple(p.position), p.radius, bool(p.active), bool(p.visible),
+                         p.rgba, p.age_ms, tuple(p.colour))
+                for p in self._snapshot(_lib.csc_session_presence_count,
+                                        _lib.csc_session_get_presence, csc_presence)]
+
+    def peers(self) -> list:
+        """The other peers (a list of PeerInfo): members, then the latest that left."""
+        result = []
+        # Names are borrowed until the next peer_count: decoded (copied) before that.
+        for p in self._snapshot(_lib.csc_session_peer_count, _lib.csc_session_get_peer,
+                                csc_peer_info):
+            try:
+                state = PeerState(p.state)
+            except ValueError:
+                state = p.state
+            result.append(PeerInfo(p.id, (p.name or b"").decode("utf-8", "replace"), state,
+                                   bool(p.merger), p.version, p.latency_ms))
+        return result
 
     def leave(self) -> None:
         """Tells the others this peer leaves and stops the network thread. Reads (invite, id,

@@ -67,6 +67,9 @@ struct csc_session {
   std::string event_message;  // of the last polled event
   std::vector<csculpt::peer::Event> pending_events;
   std::vector<std::uint32_t> changed;  // of the last undo or redo
+  // the snapshots csc_session_presence_count and csc_session_peer_count took
+  std::vector<csculpt::peer::PeerPresence> presence;
+  std::vector<csculpt::peer::PeerInfo> peers;
   bool left = false;
 };
 

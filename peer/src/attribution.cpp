@@ -75,13 +75,17 @@ void add_contribution(const Contribution& c, std::vector<float>& into) {
   }
 }
 
+std::array<float, 3> peer_colour(std::size_t rank) {
+  // green, blue, red, magenta, orange, teal, yellow, violet: green + blue mix to cyan (Fig. 1)
+  static const std::array<float, 3> hues[8] = {
+      {0.1f, 0.85f, 0.2f},  {0.15f, 0.35f, 0.95f}, {0.9f, 0.15f, 0.1f}, {0.85f, 0.2f, 0.8f},
+      {0.95f, 0.55f, 0.1f}, {0.1f, 0.6f, 0.6f},    {0.9f, 0.85f, 0.1f}, {0.5f, 0.3f, 0.85f}};
+  return hues[rank % 8];
+}
+
 std::vector<float> attribution_colours(
     const std::vector<std::pair<PeerId, std::vector<float>>>& attribution,
     std::size_t vertex_count) {
-  // green, blue, red, magenta, orange, teal, yellow, violet: green + blue mix to cyan (Fig. 1)
-  static const float hues[8][3] = {{0.1f, 0.85f, 0.2f}, {0.15f, 0.35f, 0.95f}, {0.9f, 0.15f, 0.1f},
-                                   {0.85f, 0.2f, 0.8f}, {0.95f, 0.55f, 0.1f},  {0.1f, 0.6f, 0.6f},
-                                   {0.9f, 0.85f, 0.1f}, {0.5f, 0.3f, 0.85f}};
   std::vector<float> rgb(vertex_count * 3, 0.82f);
   for (std::size_t v = 0; v < vertex_count; ++v) {
     float total = 0, peak = 0;
@@ -93,7 +97,8 @@ std::vector<float> attribution_colours(
     float mix[3] = {0, 0, 0};
     for (std::size_t k = 0; k < attribution.size(); ++k) {
       const float share = attribution[k].second[v] / peak;  // both at full: additive mix
-      for (int j = 0; j < 3; ++j) mix[j] += share * hues[k % 8][j];
+      const std::array<float, 3> hue = peer_colour(k);
+      for (int j = 0; j < 3; ++j) mix[j] += share * hue[j];
     }
     for (int j = 0; j < 3; ++j) rgb[3 * v + j] = std::min(1.f, mix[j]);
   }

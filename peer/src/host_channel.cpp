@@ -14,6 +14,49 @@ std::deque<Command> HostChannel::take_commands() {
   return out;
 }
 
+bool HostChannel::set_presence(const Presence& p) {
+  std::lock_guard lock(mutex_);
+  if (presence_set_ && own_presence_ == p) return false;  // hosts may set it every frame
+  own_presence_ = p;
+  presence_set_ = true;
+  const bool wake = !presence_changed_;
+  presence_changed_ = true;
+  return wake;
+}
+
+std::pair<bool, bool> HostChannel::presence_state() const {
+  std::lock_guard lock(mutex_);
+  return {presence_changed_, presence_set_};
+}
+
+Presence HostChannel::take_presence() {
+  std::lock_guard lock(mutex_);
+  presence_changed_ = false;
+  return own_presence_;
+}
+
+std::map<PeerId, ReceivedPresence> HostChannel::presence() const {
+  std::lock_guard lock(mutex_);
+  return presence_.latest();
+}
+
+void HostChannel::set_peers(std::vector<PeerInfo> peers) {
+  std::lock_guard lock(mutex_);
+  peers_ = std::move(peers);
+}
+
+std::vector<PeerInfo> HostChannel::peers() const {
+  std::lock_guard lock(mutex_);
+  return peers_;
+}
+
+std::vector<PeerId> HostChannel::attribution_peers() const {
+  std::lock_guard lock(mutex_);
+  std::vector<PeerId> out;
+  for (const auto& [peer, values] : attribution_) out.push_back(peer);
+  return out;
+}
+
 std::vector<HostItem> HostChannel::take_items() {
   std::lock_guard lock(mutex_);
   std::vector<HostItem> out(std::make_move_iterator(items_.begin()),

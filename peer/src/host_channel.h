@@ -18,6 +18,7 @@
 #include "csculpt/merge.h"
 #include "csculpt/peer/session.h"
 #include "messages.h"
+#include "presence.h"
 #include "snapshot.h"
 
 namespace csculpt::peer {
@@ -47,6 +48,12 @@ class HostChannel {
   // ---- host -> network ----------------------------------------------------------------------
   void post(Command c);
   std::deque<Command> take_commands();
+  /// The host's brush cursor (only the latest is kept: the network thread rate-limits it).
+  /// True when the network thread should be woken: a change it has not seen, none before.
+  bool set_presence(const Presence& p);
+  /// Whether the host changed its presence since the last take, and whether it ever set one.
+  std::pair<bool, bool> presence_state() const;
+  Presence take_presence();
 
   // ---- network -> host ----------------------------------------------------------------------
   /// A version or snapshot for update(), with the statistics it changes (`change`) under the
@@ -76,6 +83,19 @@ class HostChannel {
     change(attribution_);
   }
   std::vector<std::pair<PeerId, std::vector<float>>> attribution() const;
+  /// The peers attribution holds (increasing id), without their values.
+  std::vector<PeerId> attribution_peers() const;
+
+  /// The others' presence: the network thread changes it (`change(PresenceTable&)`).
+  template <class Change>
+  void update_presence(Change&& change) {
+    std::lock_guard lock(mutex_);
+    change(presence_);
+  }
+  std::map<PeerId, ReceivedPresence> presence() const;
+  /// The others as the network thread last listed them.
+  void set_peers(std::vector<PeerInfo> peers);
+  std::vector<PeerInfo> peers() const;
   /// A snapshot's merge frame and attribution, replacing ours.
   void set_frame_and_attribution(const MergeFrame& frame,
                                  std::map<PeerId, std::vector<float>> attribution);
@@ -102,6 +122,10 @@ class HostChannel {
   std::map<PeerId, std::vector<float>> attribution_;  // per peer, a value per vertex
   std::shared_ptr<const Hierarchy> hierarchy_;        // built once the mesh is known
   MergeFrame frame_;                                  // the session's, from its first mesh
+  Presence own_presence_;                             // the host's latest
+  bool presence_set_ = false, presence_changed_ = false;
+  PresenceTable presence_;       // the others' latest cursors
+  std::vector<PeerInfo> peers_;  // the others, as last listed
 };
 
 }  // namespace csculpt::peer

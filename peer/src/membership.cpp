@@ -15,10 +15,17 @@ bool Membership::heard(PeerId peer, const std::string& endpoint, Clock::time_poi
   auto [it, inserted] = members_.try_emplace(peer, Member{peer, endpoint, now, false});
   if (!inserted) {
     it->second.last_heard = now;
+    if (it->second.evasive) revived_.push_back(peer);
     it->second.evasive = false;
     if (!endpoint.empty()) it->second.endpoint = endpoint;
   }
   return inserted;
+}
+
+std::vector<PeerId> Membership::take_revived() {
+  std::vector<PeerId> out;
+  out.swap(revived_);
+  return out;
 }
 
 bool Membership::learnt(PeerId peer, const std::string& endpoint, Clock::time_point now) {

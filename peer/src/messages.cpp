@@ -2,6 +2,7 @@
 
 #include <cstring>
 
+#include "csculpt/error.h"
 #include "transport.h"
 
 namespace csculpt::peer {
@@ -16,14 +17,36 @@ Bytes hello_message(const EnvelopeHeader& h, const std::string& endpoint, const 
 }
 
 Bytes heartbeat_message(const EnvelopeHeader& h, std::uint64_t version, std::uint64_t chain,
-                        PeerId merger, const std::vector<std::pair<PeerId, std::string>>& members) {
+                        PeerId merger, const std::vector<std::pair<PeerId, std::string>>& members,
+                        const HeartbeatTiming& timing) {
   return envelope(h, fb::Body::Heartbeat, [&](auto& b) {
     std::vector<flatbuffers::Offset<fb::Member>> list;
     for (const auto& [id, endpoint] : members)
       list.push_back(fb::CreateMember(b, id, b.CreateString(endpoint)));
     const auto vec = b.CreateVector(list);
-    return fb::CreateHeartbeat(b, version, chain, merger, vec).Union();
+    const auto echoes = b.CreateVectorOfStructs(timing.echoes);
+    return fb::CreateHeartbeat(b, version, chain, merger, vec, timing.sent_us, echoes).Union();
   });
+}
+
+Bytes presence_message(const EnvelopeHeader& h, std::uint64_t sequence, const Presence& p) {
+  return envelope(h, fb::Body::Presence, [&](auto& b) {
+    const fb::Point position(p.position.x, p.position.y, p.position.z);
+    return fb::CreatePresence(b, sequence, &position, p.radius, p.active, p.visible, p.rgba)
+        .Union();
+  });
+}
+
+Presence presence_of(const fb::Presence& p) {
+  if (!p.position()) throw InvalidInput("presence without a position");
+  Presence out;
+  out.position = {p.position()->x(), p.position()->y(), p.position()->z()};
+  out.radius = p.radius();
+  out.active = p.active();
+  out.visible = p.visible();
+  out.rgba = p.rgba();
+  validate_presence(out);
+  return out;
 }
 
 Bytes leave_message(const EnvelopeHeader& h) {

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "csculpt/peer/membership.h"
+#include "csculpt/peer/session.h"
 #include "session_generated.h"
 
 namespace csculpt::peer {
@@ -58,6 +59,13 @@ struct VersionRecord {
   std::uint32_t conflicting = 0;  ///< strokes a conflict-rejecting system would refuse
 };
 
+/// A heartbeat's clock and echoes (round trips: protocol.md, Membership).
+struct HeartbeatTiming {
+  std::uint64_t sent_us = 0;  ///< the sender's monotonic clock
+  /// Per member: its last heartbeat's sent_us and how long we held it (Echo).
+  std::vector<fb::Echo> echoes;
+};
+
 /// An envelope around the body `fill(builder)` returns (a flatbuffers::Offset<void>).
 template <class Fill>
 Bytes envelope(const EnvelopeHeader& header, fb::Body type, Fill&& fill) {
@@ -78,7 +86,13 @@ Bytes hello_message(const EnvelopeHeader& h, const std::string& endpoint, const 
 /// `members`: id and endpoint of every member the sender knows (gossip).
 Bytes heartbeat_message(const EnvelopeHeader& h, std::uint64_t version, std::uint64_t chain,
                         PeerId merger,
-                        const std::vector<std::pair<PeerId, std::string>>& members = {});
+                        const std::vector<std::pair<PeerId, std::string>>& members = {},
+                        const HeartbeatTiming& timing = {});
+/// The sender's brush cursor, its `sequence`-th presence message.
+Bytes presence_message(const EnvelopeHeader& h, std::uint64_t sequence, const Presence& p);
+/// A received Presence body, checked (validate_presence); throws InvalidInput saying what is
+/// wrong, which drops the message.
+Presence presence_of(const fb::Presence& p);
 Bytes leave_message(const EnvelopeHeader& h);
 Bytes elected_message(const EnvelopeHeader& h, PeerId merger);
 Bytes submit_message(const EnvelopeHeader& h, std::span<const std::uint8_t> diff,

@@ -57,6 +57,10 @@ void PeerNode::command(Command c) {
   transport_.wake();
 }
 
+void PeerNode::presence(const Presence& p) {
+  if (host_.set_presence(p)) transport_.wake();
+}
+
 std::string PeerNode::invite_text() const {
   Invite inv = invite_;
   inv.endpoint = transport_.endpoint();
@@ -84,9 +88,13 @@ void PeerNode::loop() {
   if (joined_) broadcast(leave_message(header()));
 }
 
-/// The earliest timer: the heartbeat, and the merge while we are the merger.
+/// The earliest timer: the heartbeat, our presence, and the merge while we are the merger.
 Clock::time_point PeerNode::next_deadline() const {
-  return election_.is_merger() ? std::min(next_heartbeat_, next_merge_) : next_heartbeat_;
+  const auto [changed, any] = host_.presence_state();
+  // Before the mesh came there is nobody to show a cursor to (and the timer would be past).
+  const Clock::time_point t =
+      joined_ ? std::min(next_heartbeat_, presence_.next_send(changed, any)) : next_heartbeat_;
+  return election_.is_merger() ? std::min(t, next_merge_) : t;
 }
 
 void PeerNode::receive_all() {
@@ -118,6 +126,7 @@ void PeerNode::run_timers(Clock::time_point now) {
     next_merge_ = now + options_.sync;
     merge_pending();
   }
+  send_presence(now);
 }
 
 void PeerNode::publish_stats() {
@@ -130,6 +139,7 @@ void PeerNode::publish_stats() {
     s.members = static_cast<std::uint32_t>(membership_.members().size());
     s.auth_rejected += rejected;
   });
+  host_.set_peers(peer_table_.list(membership_, election_.merger(), reported_));
 }
 
 // ---- inbound ----------------------------------------------------------------------------------
@@ -151,6 +161,7 @@ void PeerNode::handle(const Inbound& message, Clock::time_point now) {
   } catch (const IoError& e) {  // e.g. an endpoint ZeroMQ refuses to connect to
     dropped(e.what());
   }
+  report_revived();
 }
 
 void PeerNode::dispatch(const fb::Envelope& env, Clock::time_point now) {
@@ -179,6 +190,9 @@ void PeerNode::dispatch(const fb::Envelope& env, Clock::time_point now) {
       return send_snapshot(sender);
     case fb::Body::SnapshotChunk:
       return on_snapshot_chunk(*env.body_as_SnapshotChunk());
+    case fb::Body::Presence:
+      heard(sender, now);
+      return on_presence(sender, *env.body_as_Presence(), now);
     default:
       return dropped("message of unknown kind " +
                      std::to_string(static_cast<int>(env.body_type())));
@@ -199,6 +213,8 @@ void PeerNode::on_hello(const fb::Envelope& env, const fb::Hello& hello, Clock::
     return dropped("hello without a usable endpoint");
   const PeerId peer = env.sender();
   const std::string endpoint = hello.endpoint()->str();
+  if (hello.name() && hello.name()->size() <= max_author_bytes)
+    peer_table_.named(peer, hello.name()->str());
   if (membership_.heard(peer, endpoint, now))
     member_joined(peer, endpoint);
   else
@@ -223,6 +239,7 @@ void PeerNode::on_heartbeat(const fb::Envelope& env, const fb::Heartbeat& hb,
     if (!membership_.contains(sender)) return;
   }
   membership_.heard(sender, "", now);
+  heard_timing(sender, hb, now);
   learn_members(hb, now);
   reported_[sender] = {hb.version(), hb.chain()};
   if (hb.merger() != 0) on_elected(env, hb.merger());
@@ -236,6 +253,15 @@ void PeerNode::on_heartbeat(const fb::Envelope& env, const fb::Heartbeat& hb,
   // Another history than the merger's at a version we hold: we hold a lost merger's version.
   if (election_.merger() == sender && hb.version() <= replication_.version())
     check_divergence(sender, hb.version(), hb.chain(), now);
+}
+
+/// Round trips: we echo the sender's clock in our next heartbeat, and its echo of ours (if
+/// any) is a sample of the round trip to it.
+void PeerNode::heard_timing(PeerId sender, const fb::Heartbeat& hb, Clock::time_point now) {
+  if (hb.sent_us() != 0) peer_table_.heartbeat_from(sender, hb.sent_us(), now);
+  if (const auto* echoes = hb.echoes())
+    for (const fb::Echo* e : *echoes)
+      if (e->peer() == self_) peer_table_.echoed(sender, *e, now);
 }
 
 /// Gossip: the members a heartbeat lists, added as if heard now (they expire if unreachable).
@@ -252,9 +278,7 @@ void PeerNode::learn_members(const fb::Heartbeat& hb, Clock::time_point now) {
 void PeerNode::on_leave(PeerId peer) {
   if (!membership_.contains(peer)) return;
   membership_.remove(peer);  // its socket closes later, with those of expired peers
-  if (merger_) merger_->forget(peer);
-  reported_.erase(peer);
-  event(EventKind::peer_left, peer, "left");
+  departed(peer, "left");
   elect();
 }
 
@@ -317,6 +341,12 @@ void PeerNode::on_fetch(PeerId peer, std::uint64_t after) {
   for (const VersionRecord* r : *kept) send_to_peer(peer, version_message(header(), *r, true));
 }
 
+void PeerNode::on_presence(PeerId sender, const fb::Presence& p, Clock::time_point now) {
+  if (!membership_.contains(sender)) return;  // a stranger's cursor is nobody's to draw
+  const Presence presence = presence_of(p);   // InvalidInput (NaN, no position): dropped
+  host_.update_presence([&](PresenceTable& t) { t.accept(sender, p.sequence(), presence, now); });
+}
+
 void PeerNode::on_snapshot_chunk(const fb::SnapshotChunk& c) {
   if (!c.data()) return dropped("snapshot chunk without data");
   if (c.total() > options_.max_snapshot_bytes)
@@ -359,6 +389,7 @@ void PeerNode::install_snapshot(std::shared_ptr<const Snapshot> snap) {
 // ---- membership and election glue -------------------------------------------------------------
 
 void PeerNode::member_joined(PeerId peer, const std::string& endpoint) {
+  peer_table_.returned(peer);
   transport_.connect(endpoint);
   // Introduce ourselves: the newcomer learns our endpoint and that we are alive.
   transport_.send(endpoint, hello(false));
@@ -382,11 +413,22 @@ void PeerNode::elect() {
 void PeerNode::expire(Clock::time_point now) {
   const Membership::Changes changes = membership_.tick(now);
   for (PeerId p : changes.evasive) event(EventKind::peer_evasive, p);
-  for (PeerId p : changes.expired) {
-    if (merger_) merger_->forget(p);
-    reported_.erase(p);
-    event(EventKind::peer_left, p, "expired");
-  }
+  for (PeerId p : changes.expired) departed(p, "expired");
+}
+
+/// `peer` is no longer a member: what it sent for merging, its version and its cursor go.
+void PeerNode::departed(PeerId peer, const char* how) {
+  if (merger_) merger_->forget(peer);
+  reported_.erase(peer);
+  host_.update_presence([&](PresenceTable& t) { t.forget(peer); });
+  peer_table_.departed(peer);
+  event(EventKind::peer_left, peer, how);
+}
+
+/// Peers reported evasive and heard again since: the host learns they are live.
+void PeerNode::report_revived() {
+  for (PeerId p : membership_.take_revived())
+    if (membership_.contains(p)) event(EventKind::peer_live, p);
 }
 
 // ---- replication glue -------------------------------------------------------------------------
@@ -505,9 +547,10 @@ void PeerNode::send_heartbeat_to(const std::string& endpoint) {
   std::vector<std::pair<PeerId, std::string>> members;
   for (const auto& [id, m] : membership_.members())
     if (!m.endpoint.empty()) members.emplace_back(id, m.endpoint);
-  transport_.send(endpoint,
-                  heartbeat_message(header(), replication_.version(), replication_.chain(),
-                                    election_.merger().value_or(0), members));
+  const Clock::time_point now = Clock::now();
+  transport_.send(endpoint, heartbeat_message(header(), replication_.version(),
+                                              replication_.chain(), election_.merger().value_or(0),
+                                              members, {micros(now), peer_table_.echoes(now)}));
 }
 
 Bytes PeerNode::hello(bool wants_snapshot) const {
@@ -533,6 +576,14 @@ void PeerNode::send_own_submit() {
   } else if (election_.merger()) {
     send_to_peer(*election_.merger(), bytes);
   }
+}
+
+/// Our cursor to every member: a change at most every 50 ms, the same again every second.
+void PeerNode::send_presence(Clock::time_point now) {
+  const auto [changed, any] = host_.presence_state();
+  if (!joined_ || !presence_.due(changed, any, now)) return;
+  const Presence p = host_.take_presence();
+  broadcast(presence_message(header(), presence_.sent(now), p));
 }
 
 void PeerNode::merge_pending() {

@@ -21,6 +21,8 @@
 #include "host_channel.h"
 #include "merger_role.h"
 #include "messages.h"
+#include "peer_table.h"
+#include "presence.h"
 #include "replication.h"
 #include "snapshot.h"
 #include "transport.h"
@@ -49,6 +51,8 @@ class PeerNode {
   HostChannel& host() { return host_; }
   /// Posts a command and wakes the thread.
   void command(Command c);
+  /// The host's brush cursor: kept, and the thread woken when it has a change to send.
+  void presence(const Presence& p);
   PeerId id() const { return self_; }
   const std::string& endpoint() const { return transport_.endpoint(); }
   std::string invite_text() const;
@@ -76,6 +80,8 @@ class PeerNode {
   bool is_current_merger_version(const fb::Envelope& env);
   void on_fetch(PeerId peer, std::uint64_t after);
   void on_snapshot_chunk(const fb::SnapshotChunk& c);
+  void on_presence(PeerId sender, const fb::Presence& p, Clock::time_point now);
+  void heard_timing(PeerId sender, const fb::Heartbeat& hb, Clock::time_point now);
   void install_snapshot(std::shared_ptr<const Snapshot> snap);
 
   // membership and election glue
@@ -83,6 +89,8 @@ class PeerNode {
   void merger_changed();
   void elect();
   void expire(Clock::time_point now);
+  void departed(PeerId peer, const char* how);
+  void report_revived();
 
   // replication glue
   void apply_version(VersionRecord r);
@@ -101,6 +109,7 @@ class PeerNode {
   void send_heartbeat_to(const std::string& endpoint);
   Bytes hello(bool wants_snapshot) const;
   void send_own_submit();
+  void send_presence(Clock::time_point now);
   void merge_pending();
   void build_merge_state();
 
@@ -133,6 +142,8 @@ class PeerNode {
   SnapshotAssembly snapshot_;  // the chunks of the snapshot on its way to us
   /// We asked for a snapshot (divergence): accept one older than our version.
   bool snapshot_requested_ = false;
+  PresenceSender presence_;  // when our cursor goes out
+  PeerTable peer_table_;     // names, round trips, who left lately
 
   // rate limits
   Clock::time_point next_heartbeat_{};         // the membership timer (greetings while joining)

@@ -14,6 +14,7 @@
 #include "invite.h"
 #include "merger_role.h"
 #include "peer_node.h"
+#include "presence.h"
 #include "rebase.h"
 #include "undo_stack.h"
 
@@ -280,6 +281,38 @@ SessionStats Session::stats() const {
 
 std::vector<std::pair<PeerId, std::vector<float>>> Session::attribution() const {
   return impl_->node->host().attribution();
+}
+
+void Session::set_presence(const Presence& presence) {
+  if (impl_->left) throw InvalidInput("set_presence: the session was left");
+  validate_presence(presence);
+  impl_->node->presence(presence);
+}
+
+std::vector<PeerPresence> Session::presence() const {
+  HostChannel& host = impl_->node->host();
+  // Colours as the attribution view gives them: contributors first, then the other members.
+  const std::vector<PeerId> contributors = host.attribution_peers();
+  std::vector<PeerId> members{id()};
+  for (const PeerInfo& p : host.peers())
+    if (p.state != PeerState::left) members.push_back(p.id);
+  std::sort(members.begin(), members.end());
+  const Clock::time_point now = Clock::now();
+  std::vector<PeerPresence> out;
+  for (const auto& [peer, r] : host.presence()) {
+    PeerPresence p;
+    p.peer = peer;
+    p.presence = r.presence;
+    p.sequence = r.sequence;
+    p.age = std::chrono::duration_cast<Millis>(now - r.at);
+    p.colour = presence_colour(peer, r.presence.rgba, contributors, members);
+    out.push_back(p);
+  }
+  return out;
+}
+
+std::vector<PeerInfo> Session::peers() const {
+  return impl_->node->host().peers();
 }
 
 void Session::leave() {

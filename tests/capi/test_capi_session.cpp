@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -186,6 +187,88 @@ TEST(CapiSession, BadArgumentsAndInvitesAreRefusedClearly) {
   EXPECT_EQ(csc_session_submit(s, &vh, 1, nullptr), CSC_ERROR_INVALID_INPUT);
   EXPECT_TRUE(std::isnan(h.positions[4]));  // nothing written back on failure
   csc_session_destroy(s);
+  csc_mesh_destroy(mesh);
+}
+
+bool wait_for(const std::function<bool()>& done) {
+  for (int i = 0; i < 1000 && !done(); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  return done();
+}
+
+TEST(CapiSession, PresenceAndPeersCrossTheAbi) {
+  csc_mesh* mesh = grid(16);
+  csc_session_options oa = fast(1), ob = fast(2);
+  oa.name = "ana";
+  ob.name = "ben";
+  csc_session *a = nullptr, *b = nullptr;
+  ASSERT_EQ(csc_session_create(&a, mesh, &oa), CSC_OK) << csc_last_error();
+  ASSERT_EQ(csc_session_join(&b, csc_session_invite(a), &ob), CSC_OK) << csc_last_error();
+  csc_presence mine = CSC_PRESENCE_INIT;
+  mine.position[0] = 0.25f;
+  mine.position[1] = 0.5f;
+  mine.radius = 0.125f;
+  mine.active = 1;
+  mine.visible = 1;
+  ASSERT_EQ(csc_session_set_presence(a, &mine), CSC_OK) << csc_last_error();
+  uint32_t count = 0;
+  ASSERT_TRUE(wait_for([&] { return csc_session_presence_count(b, &count) == CSC_OK && count; }));
+  csc_presence got = CSC_PRESENCE_INIT;
+  ASSERT_EQ(csc_session_get_presence(b, 0, &got), CSC_OK) << csc_last_error();
+  EXPECT_EQ(got.peer, 1u);
+  EXPECT_EQ(got.position[0], 0.25f);
+  EXPECT_EQ(got.position[1], 0.5f);
+  EXPECT_EQ(got.radius, 0.125f);
+  EXPECT_EQ(got.active, 1);
+  EXPECT_EQ(got.visible, 1);
+  EXPECT_LT(got.age_ms, 1000u);
+  EXPECT_GT(got.colour[1], 0.5f);  // the first peer's green
+  EXPECT_EQ(csc_session_get_presence(b, 1, &got), CSC_ERROR_INVALID_ARGUMENT);
+  // Peers: names, merger, round trips.
+  ASSERT_TRUE(wait_for([&] {
+    csc_peer_info p = CSC_PEER_INFO_INIT;
+    return csc_session_peer_count(b, &count) == CSC_OK && count == 1 &&
+           csc_session_get_peer(b, 0, &p) == CSC_OK && p.latency_ms > 0;
+  }));
+  csc_peer_info info = CSC_PEER_INFO_INIT;
+  ASSERT_EQ(csc_session_get_peer(b, 0, &info), CSC_OK);
+  EXPECT_EQ(info.id, 1u);
+  EXPECT_STREQ(info.name, "ana");
+  EXPECT_EQ(info.state, CSC_PEER_LIVE);
+  EXPECT_EQ(info.merger, 1);
+  EXPECT_LT(info.latency_ms, 1000.0);
+  // Bad host values name the field; nothing is sent.
+  mine.position[2] = std::nanf("");
+  EXPECT_EQ(csc_session_set_presence(a, &mine), CSC_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(std::string(csc_last_error()).find("position.z"), std::string::npos);
+  mine.position[2] = 0.f;
+  mine.radius = -1.f;
+  EXPECT_EQ(csc_session_set_presence(a, &mine), CSC_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(std::string(csc_last_error()).find("radius"), std::string::npos);
+  mine.radius = INFINITY;
+  EXPECT_EQ(csc_session_set_presence(a, &mine), CSC_ERROR_INVALID_ARGUMENT);
+  mine.radius = 0.1f;
+  mine.struct_size = 4;
+  EXPECT_EQ(csc_session_set_presence(a, &mine), CSC_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(csc_session_set_presence(a, nullptr), CSC_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(csc_session_presence_count(a, nullptr), CSC_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(csc_session_peer_count(nullptr, &count), CSC_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(csc_session_get_peer(b, 0, nullptr), CSC_ERROR_INVALID_ARGUMENT);
+  // b leaves: a sees its cursor go and lists it as left.
+  mine = CSC_PRESENCE_INIT;
+  mine.visible = 1;
+  ASSERT_EQ(csc_session_set_presence(b, &mine), CSC_OK);
+  ASSERT_TRUE(wait_for([&] { return csc_session_presence_count(a, &count) == CSC_OK && count; }));
+  ASSERT_EQ(csc_session_leave(b), CSC_OK);
+  EXPECT_EQ(csc_session_set_presence(b, &mine), CSC_ERROR_INVALID_ARGUMENT);
+  ASSERT_TRUE(wait_for([&] { return csc_session_presence_count(a, &count) == CSC_OK && !count; }));
+  ASSERT_EQ(csc_session_peer_count(a, &count), CSC_OK);
+  ASSERT_EQ(count, 1u);
+  ASSERT_EQ(csc_session_get_peer(a, 0, &info), CSC_OK);
+  EXPECT_EQ(info.state, CSC_PEER_LEFT);
+  EXPECT_STREQ(info.name, "ben");
+  csc_session_destroy(b);
+  csc_session_destroy(a);
   csc_mesh_destroy(mesh);
 }
 

@@ -13,20 +13,14 @@
 #include "csculpt/merge.h"
 #include "csculpt/peer/session.h"
 #include "csculpt/testkit/generate.h"
+#include "sessions.h"
 
 namespace {
 
 using namespace csculpt;
 using namespace csculpt::peer;
 using namespace std::chrono_literals;
-
-SessionOptions fast_options(PeerId id) {
-  SessionOptions o;
-  o.id = id;
-  o.sync = Millis{30};
-  o.membership = {Millis{50}, Millis{200}, Millis{400}};
-  return o;
-}
+using csculpt::peer::testing::fast_options;
 
 struct Artist {
   std::unique_ptr<Session> session;

@@ -178,5 +178,31 @@ int main(void) {
   INIT(csc_session_stats, CSC_SESSION_STATS_INIT, members);
   INIT(csc_session_stats, CSC_SESSION_STATS_INIT, merge_ms_mean);
   INIT(csc_session_stats, CSC_SESSION_STATS_INIT, auth_rejected);
+
+  SIZE(csc_presence);
+  FIELD(csc_presence, struct_size);
+  FIELD(csc_presence, peer);
+  FIELD(csc_presence, position);
+  FIELD(csc_presence, radius);
+  FIELD(csc_presence, active);
+  FIELD(csc_presence, visible);
+  FIELD(csc_presence, rgba);
+  FIELD(csc_presence, age_ms);
+  FIELD(csc_presence, colour);
+  INIT(csc_presence, CSC_PRESENCE_INIT, struct_size);
+  INIT(csc_presence, CSC_PRESENCE_INIT, radius);
+  INIT(csc_presence, CSC_PRESENCE_INIT, visible);
+
+  SIZE(csc_peer_info);
+  FIELD(csc_peer_info, struct_size);
+  FIELD(csc_peer_info, id);
+  FIELD(csc_peer_info, name);
+  FIELD(csc_peer_info, state);
+  FIELD(csc_peer_info, merger);
+  FIELD(csc_peer_info, version);
+  FIELD(csc_peer_info, latency_ms);
+  INIT(csc_peer_info, CSC_PEER_INFO_INIT, struct_size);
+  INIT(csc_peer_info, CSC_PEER_INFO_INIT, state);
+  INIT(csc_peer_info, CSC_PEER_INFO_INIT, latency_ms);
   return 0;
 }

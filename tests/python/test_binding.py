@@ -147,7 +147,8 @@ class Enums(unittest.TestCase):
         enums = {"csc_status": (csculpt.Status, "CSC_"),
                  "csc_linearisation": (csculpt.Linearisation, "CSC_LINEARISATION_"),
                  "csc_merge_method": (csculpt.MergeMethod, "CSC_MERGE_"),
-                 "csc_event_kind": (csculpt.EventKind, "CSC_EVENT_")}
+                 "csc_event_kind": (csculpt.EventKind, "CSC_EVENT_"),
+                 "csc_peer_state": (csculpt.PeerState, "CSC_PEER_")}
         found = re.findall(r"typedef enum (csc_\w+) \{(.*?)\}", text, flags=re.S)
         self.assertEqual(sorted(name for name, _ in found), sorted(enums))
         for name, body in found:

@@ -243,6 +243,34 @@ class Undo(unittest.TestCase):
             self.assertEqual(a.undo_depth, (0, 1), "a refused stroke changed the history")
 
 
+class PresenceAndPeers(unittest.TestCase):
+
+    def test_cursors_and_peer_info_cross_the_binding(self):
+        with material_sphere() as mesh, \
+                csculpt.Session.create(mesh, id=1, name="ana", **FAST) as a, \
+                csculpt.Session.join(a.invite, id=2, name="ben", join_timeout_ms=10000,
+                                     **FAST) as b:
+            a.set_presence((0.25, 0.5, -1.0), 0.125, active=True)
+            wait_for(lambda: b.presence(), "a's cursor at b")
+            [p] = b.presence()
+            self.assertEqual((p.peer, p.position, p.radius, p.active, p.visible),
+                             (1, (0.25, 0.5, -1.0), 0.125, True, True))
+            self.assertLess(p.age_ms, 1000)
+            self.assertEqual(len(p.colour), 3)
+            wait_for(lambda: b.peers() and b.peers()[0].latency_ms > 0, "a round trip")
+            [info] = b.peers()
+            self.assertEqual((info.id, info.name, info.state, info.merger),
+                             (1, "ana", csculpt.PeerState.LIVE, True))
+            self.assertLess(info.latency_ms, 1000.0)
+            with self.assertRaisesRegex(csculpt.InvalidArgument, "radius is negative"):
+                a.set_presence((0, 0, 0), -1.0)
+            with self.assertRaisesRegex(csculpt.InvalidArgument, "position.x"):
+                a.set_presence((float("nan"), 0, 0), 1.0)
+            b.leave()
+            wait_for(lambda: not a.presence() and a.peers() and
+                     a.peers()[0].state == csculpt.PeerState.LEFT, "b gone from a's view")
+            self.assertEqual(csculpt.EventKind.PEER_LIVE, 8)
+
 class Errors(unittest.TestCase):
 
     def test_a_malformed_invite_is_invalid_input(self):

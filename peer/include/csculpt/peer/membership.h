@@ -42,8 +42,11 @@ class Membership {
     bool empty() const { return joined.empty() && evasive.empty() && expired.empty(); }
   };
 
-  /// We heard from `peer` (any verified message) at `now`. Returns true if it is new.
+  /// We heard from `peer` (any verified message) at `now`. Returns true if it is new. A peer
+  /// that was evasive is live again: take_revived() lists it.
   bool heard(PeerId peer, const std::string& endpoint, Clock::time_point now);
+  /// The peers reported evasive that were heard again since the last call.
+  std::vector<PeerId> take_revived();
   /// We learnt of `peer` from someone else (gossip): added as if heard at `now`, so an
   /// unreachable one expires after the threshold. Returns true if it is new.
   bool learnt(PeerId peer, const std::string& endpoint, Clock::time_point now);
@@ -67,6 +70,7 @@ class Membership {
   std::map<PeerId, Member> members_;
   /// Peers seen to expire: gossip about them is not believed for a while.
   std::map<PeerId, Clock::time_point> tombstones_;
+  std::vector<PeerId> revived_;  // evasive, then heard again: not yet taken
 };
 
 /// One merger per epoch (Raft's one leader per term), chosen by a deterministic rule among

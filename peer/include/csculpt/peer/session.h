@@ -66,6 +66,7 @@ enum class EventKind : std::uint32_t {
   merger_changed = 5,  ///< `peer` merges from epoch `epoch` on
   dropped = 6,         ///< a message was malformed or hostile and dropped (`message` says why)
   error = 7,           ///< something failed on the network thread (`message`)
+  peer_live = 8,       ///< `peer`, reported evasive, was heard again
 };
 
 struct Event {
@@ -109,6 +110,43 @@ struct SessionStats {
   std::uint64_t snapshots_sent = 0;
   std::uint64_t fetches = 0;
 };
+
+/// A brush cursor (presence): where an artist's brush is, shown live to the others.
+struct Presence {
+  Vec3f position{};        ///< in the session mesh's coordinates
+  float radius = 0;        ///< the brush radius in mesh units
+  bool active = false;     ///< a stroke is under way
+  bool visible = false;    ///< the cursor is over the mesh
+  std::uint32_t rgba = 0;  ///< 0xRRGGBBAA to be drawn in; 0: the receivers' choice
+  friend bool operator==(const Presence&, const Presence&) = default;
+};
+/// Throws InvalidInput naming the field: a non-finite position or radius, a negative radius.
+void validate_presence(const Presence& p);
+
+/// Another peer's latest presence, as this peer holds it.
+struct PeerPresence {
+  PeerId peer = 0;
+  Presence presence;
+  std::uint64_t sequence = 0;  ///< the sender's numbering of it
+  Millis age{0};               ///< since it arrived
+  /// What to draw it in (RGB in [0,1]): its rgba if it gave one, else its attribution colour.
+  std::array<float, 3> colour{};
+};
+
+enum class PeerState : std::uint32_t { live = 0, evasive = 1, left = 2 };
+
+/// Another peer as this one sees it.
+struct PeerInfo {
+  PeerId id = 0;
+  std::string name;  ///< from its hello ("" until that arrived)
+  PeerState state = PeerState::live;
+  bool merger = false;        ///< the merger this peer follows
+  std::uint64_t version = 0;  ///< the agreed version its last heartbeat reported
+  /// Round trip by heartbeat echoes (protocol.md), smoothed; negative until measured.
+  double latency_ms = -1;
+};
+/// Peers that left are still listed by Session::peers(), the latest this many.
+constexpr std::size_t kKeptDeparted = 16;
 
 /// The decoded invite: endpoint of a member, session id and the CURVE secrets.
 struct Invite {
@@ -179,6 +217,14 @@ class Session {
   /// Per peer that contributed, a value per vertex: how much of the agreed mesh's change at
   /// that vertex came from it (the paper's Fig. 1/6 attribution).
   std::vector<std::pair<PeerId, std::vector<float>>> attribution() const;
+  /// Sets this peer's brush cursor (every frame if the host likes): the network thread sends
+  /// the latest to every member at most every 50 ms while it changes, and again every second.
+  /// Throws InvalidInput naming the field (validate_presence).
+  void set_presence(const Presence& presence);
+  /// The other peers' presence (members only: a peer that left or expired has none).
+  std::vector<PeerPresence> presence() const;
+  /// The other peers: members, then the last few that left (at most kKeptDeparted).
+  std::vector<PeerInfo> peers() const;
   /// Tells the others and stops the network thread; the session is unusable afterwards.
   void leave();
 
@@ -187,6 +233,10 @@ class Session {
   explicit Session(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };
+
+/// The hue of the `rank`-th peer in increasing id order (green, blue, red, magenta, orange,
+/// teal, yellow, violet, then again): attribution_colours and presence colours use it.
+std::array<float, 3> peer_colour(std::size_t rank);
 
 /// Attribution as vertex colours (RGB in [0,1], vertex-major): peer k gets a hue (green,
 /// blue, red, ... in increasing id order), mixed by share; untouched vertices are light grey.
