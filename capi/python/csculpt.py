@@ -62,7 +62,7 @@ __all__ = [
 
 # The header version this module was written against: it runs with a library of the same
 # major and a minor at least this high (the ABI only grows within a major).
-EXPECTED_VERSION = (0, 2)
+EXPECTED_VERSION = (0, 3)
 
 # ---- Enums (32-bit in C) -------------------------------------------------------------------
 
