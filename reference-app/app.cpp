@@ -112,9 +112,6 @@ void App::layout_changed() {
   sculptor_.reset();
   history_.reset(document_);
   renderer_.upload_all(document_);
-  shadow_positions_ = document_.positions;
-  shadow_channels_.clear();
-  for (const MeshChannel& channel : document_.channels) shadow_channels_.push_back(channel.values);
   // Frame the mesh: its bounding box's centre and half diagonal.
   glm::vec3 lo(INFINITY), hi(-INFINITY);
   for (size_t i = 0; i < document_.positions.size(); i += 3)
@@ -131,7 +128,7 @@ void App::layout_changed() {
 void App::host_session() {
   std::string error;
   std::unique_ptr<csc_mesh, MeshDeleter> mesh(document_.to_csc_mesh(error));
-  if (!mesh || !session_.host(mesh.get(), error)) {
+  if (!mesh || !session_.host(mesh.get(), document_arrays(), error)) {
     report(error);
     return;
   }
@@ -152,32 +149,36 @@ void App::toggle_attribution_view() {
   if (!attribution_view_) renderer_.upload_all(document_);
 }
 
-void App::sync_after_session_write() {
-  // csc_session_update and _submit write the host's arrays in place without saying which
-  // vertices changed (an ABI gap): compare with what was last drawn.
-  session_changed_.clear();
+// The document as the session worker keeps it (its own copy).
+MeshArrays App::document_arrays() const {
+  MeshArrays a;
+  a.positions = document_.positions;
+  for (const MeshChannel& c : document_.channels) {
+    a.channels.push_back(c.values);
+    a.widths.push_back(c.width);
+    a.min_value.push_back(c.min_value);
+    a.max_value.push_back(c.max_value);
+  }
+  return a;
+}
+
+// What the session changed (merged versions, the artist's undo, the wire's rounding of the
+// strokes) into the document: only between strokes, and only once the worker's mirror holds
+// every stroke handed to it, so the artist's own work is never overwritten by an older state.
+void App::take_session_changes() {
+  const std::shared_ptr<const MeshChanges> changes = session_.take_changes();
+  if (!changes || changes->vertices.empty()) return;
+  const uint32_t stride = document_.values_per_vertex();
   bool moved = false;
-  const uint32_t vertex_count = document_.vertex_count();
-  for (uint32_t v = 0; v < vertex_count; ++v) {
-    bool changed = false;
-    for (int c = 0; c < 3; ++c)
-      if (document_.positions[3 * size_t{v} + c] != shadow_positions_[3 * size_t{v} + c]) changed = moved = true;
-    for (size_t ch = 0; ch < document_.channels.size() && !changed; ++ch) {
-      const MeshChannel& channel = document_.channels[ch];
-      for (uint32_t c = 0; c < channel.width; ++c)
-        if (channel.values[size_t{v} * channel.width + c] != shadow_channels_[ch][size_t{v} * channel.width + c])
-          changed = true;
-    }
-    if (changed) session_changed_.push_back(v);
+  for (size_t i = 0; i < changes->vertices.size(); ++i) {
+    const uint32_t v = changes->vertices[i];
+    const float* values = &changes->values[i * stride];
+    const float* p = &document_.positions[3 * size_t{v}];
+    moved = moved || p[0] != values[0] || p[1] != values[1] || p[2] != values[2];
+    document_.set_vertex_values(v, values);
   }
-  for (uint32_t v : session_changed_) {
-    std::copy_n(&document_.positions[3 * size_t{v}], 3, &shadow_positions_[3 * size_t{v}]);
-    for (size_t ch = 0; ch < document_.channels.size(); ++ch) {
-      const uint32_t w = document_.channels[ch].width;
-      std::copy_n(&document_.channels[ch].values[size_t{v} * w], w, &shadow_channels_[ch][size_t{v} * w]);
-    }
-  }
-  sculptor_.refresh_after_change(session_changed_, moved);
+  sculptor_.refresh_after_change(changes->vertices, moved);
+  attribution_dirty_ = true;
 }
 
 void App::session_tick() {
@@ -186,9 +187,9 @@ void App::session_tick() {
     const int joined = session_.poll_join(error);
     if (joined < 0) report(error);
     if (joined > 0) {
-      std::unique_ptr<csc_mesh, MeshDeleter> base(session_.copy_base(error));
+      std::unique_ptr<csc_mesh, MeshDeleter> base(session_.take_joined_mesh());
       if (!base || !document_.adopt(base.get(), "session mesh", error)) {
-        report(error);
+        report(error.empty() ? "cannot take the session's mesh" : error);
         session_.leave();
       } else {
         layout_changed();
@@ -198,16 +199,7 @@ void App::session_tick() {
   if (!session_.active()) return;
   session_.poll_events();
   send_presence();
-  if (drag_ == Drag::stroke) return;  // remote versions land between strokes, never inside one
-  csc_vertex_arrays local = document_.vertex_arrays();
-  bool written = false;
-  if (session_.version_pending() && session_.update(local) > 0) written = attribution_dirty_ = true;
-  if (strokes_since_submit_ > 0 || session_.resubmit_due()) {
-    session_.submit(local, strokes_since_submit_);
-    strokes_since_submit_ = 0;
-    written = true;  // submit quantises the local edit to what the peers receive
-  }
-  if (written) sync_after_session_write();
+  if (drag_ != Drag::stroke) take_session_changes();  // never inside a stroke
 }
 
 void App::render(bool with_ui) {
@@ -237,9 +229,12 @@ bool App::frame() {
   session_tick();
   if (attribution_view_ && !session_.active()) toggle_attribution_view();  // left: real colours back
   if (attribution_view_ && attribution_dirty_) {
-    if (session_.attribution_colours(attribution_rgb_, document_.vertex_count()))
+    // The worker computes them after each merged version; until the first, keep trying.
+    if (session_.attribution_colours(attribution_rgb_) &&
+        attribution_rgb_.size() == size_t{document_.vertex_count()} * 3) {
       renderer_.upload_colour_override(attribution_rgb_);
-    attribution_dirty_ = false;
+      attribution_dirty_ = false;
+    }
   }
   renderer_.upload_vertices(document_, sculptor_.dirty_vertices());
   sculptor_.clear_dirty();
@@ -261,6 +256,7 @@ bool App::frame() {
 void App::finish() {
   if (drag_ == Drag::stroke) end_stroke();
   if (session_.active()) {
+    session_.settle(2000);  // the artist's last strokes merged in and sent
     session_tick();
     renderer_.upload_vertices(document_, sculptor_.dirty_vertices());
     sculptor_.clear_dirty();

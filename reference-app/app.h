@@ -55,7 +55,8 @@ class App final : public InputHandlers {
   bool frame();
   void render(bool with_ui);
   void session_tick();
-  void sync_after_session_write();
+  void take_session_changes();
+  MeshArrays document_arrays() const;
   void host_session();
   void join_session(const std::string& invite);
   void report(const std::string& message);
@@ -107,7 +108,6 @@ class App final : public InputHandlers {
   BrushKind stroke_kind_ = BrushKind::draw;
   bool stroke_invert_ = false;
   glm::vec3 grab_anchor_{0.f};
-  uint32_t strokes_since_submit_ = 0;
 
   // Panels.
   std::vector<Rect> panel_rects_;  // last frame's panels: clicks there are not strokes
@@ -119,10 +119,7 @@ class App final : public InputHandlers {
   std::array<char, 1024> path_text_{};
   std::string shown_message_;
 
-  // Session shadow: the values last drawn, to find what csc_session_update/submit changed.
-  std::vector<float> shadow_positions_;
-  std::vector<std::vector<float>> shadow_channels_;
-  std::vector<uint32_t> session_changed_, undo_changed_;
+  std::vector<uint32_t> undo_changed_;
 
   // Timing.
   double start_time_ = 0;

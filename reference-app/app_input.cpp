@@ -98,11 +98,9 @@ void App::end_stroke() {
   if (drag_ == Drag::stroke) {
     sculptor_.grab_end();
     history_.end_stroke(document_);
-    if (session_.active() && history_.has_last()) {
-      csc_vertex_arrays local = document_.vertex_arrays();
-      session_.record_stroke(local, history_.last_vertices(), history_.last_before());
-    }
-    ++strokes_since_submit_;  // sent when the stroke ends (session_tick), never mid-stroke
+    // Handed over when it ends (sent then, never mid-stroke), with what undo needs.
+    if (session_.active() && history_.has_last())
+      session_.hand_stroke(history_.last_vertices(), history_.last_before(), history_.last_after());
   }
   drag_ = Drag::none;
 }
@@ -151,11 +149,7 @@ void App::redo() {
 // In a session the artist's own strokes are undone by the session (merged with everyone's
 // work since) and sent like a stroke; the local history only records them.
 void App::session_step(bool redo) {
-  if (drag_ == Drag::stroke) return;
-  csc_vertex_arrays local = document_.vertex_arrays();
-  if (!session_.undo(local, redo)) return;
-  sync_after_session_write();
-  ++strokes_since_submit_;
+  if (drag_ != Drag::stroke) session_.request_step(redo);  // the result comes back as changes
 }
 
 void App::on_key(int key, int action, int mods) {

@@ -1,107 +1,76 @@
-// The app's side of a collaborative session, through the C ABI only (csc_session_*): host or
-// join (the join waits for a snapshot, so it runs on a worker thread and the artist keeps
-// sculpting), the per-frame poll, submit and update, and what the panel shows.
+// The app's side of a collaborative session, through the C ABI only: host or join, hand the
+// artist's strokes, undo and cursor over, take back what the session changed, and what the
+// panel shows. Every csc_session_* call runs on the SessionWorker's thread (session_worker.h),
+// so nothing here waits on a merge, a rebase or the network.
 #pragma once
 
 #include <csculpt.h>
 
-#include <array>
-#include <chrono>
-#include <cstdint>
-#include <future>
-#include <set>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "session_worker.h"
+
 class SessionLink {
  public:
-  enum class PeerState { live, evasive, left };
-  struct Peer {
-    uint64_t id;
-    PeerState state;
-    std::string name;
-    bool merger = false;
-    uint64_t version = 0;
-    double latency_ms = -1;  // negative until measured
-  };
-  /** Another artist's brush cursor, recent and over the mesh. */
-  struct Cursor {
-    uint64_t peer;
-    std::array<float, 3> position;  // mesh coordinates
-    float radius;                   // mesh units
-    bool active;                    // a stroke under way
-    std::array<float, 3> colour;    // RGB in [0,1]
-  };
+  using PeerState = SessionView::PeerState;
+  using Peer = SessionView::Peer;
+  using Cursor = SessionView::Cursor;
 
   SessionLink() = default;
   SessionLink(const SessionLink&) = delete;
   SessionLink& operator=(const SessionLink&) = delete;
-  ~SessionLink();
 
-  /** Hosts a session on `mesh` (copied). On failure `error` says why. */
-  bool host(const csc_mesh* mesh, std::string& error);
+  /** Hosts a session on `mesh` (copied; `arrays` are the same values as the app keeps them).
+   *  On failure `error` says why. */
+  bool host(const csc_mesh* mesh, MeshArrays arrays, std::string& error);
   /** Starts joining in the background; poll_join() tells when it is done. */
   void begin_join(const std::string& invite);
-  /** While joining: 1 when the session is ready (copy its base into the document), -1 when
-   *  the join failed (`error`), 0 while still waiting. */
+  /** While joining: 1 when the session is ready (take_joined_mesh() for the document), -1
+   *  when the join failed (`error`), 0 while still waiting. */
   int poll_join(std::string& error);
-  bool joining() const { return join_.valid(); }
-  bool active() const { return session_ != nullptr; }
+  /** The session's mesh after a join (caller destroys). */
+  csc_mesh* take_joined_mesh() { return worker_ ? worker_->take_joined_mesh() : nullptr; }
+  bool joining() const { return worker_ && !joined_; }
+  bool active() const { return worker_ && joined_; }
 
-  /** Takes the session's events (peers, versions, errors), the peer list and the cursors. */
+  /** Reads what the worker published (peers, cursors, statistics, messages). */
   void poll_events();
   /** This artist's brush cursor (every frame: the library sends at most 20 a second). */
   void set_presence(const csc_presence& presence);
-  /** True once a merged version waits for update(). */
-  bool version_pending() const { return version_pending_; }
-  /** Applies merged versions into `local` (rebased in place); returns versions applied. */
-  uint32_t update(csc_vertex_arrays& local);
-  /** Sends the edit since the agreed version; `strokes` ended since the last submit. */
-  bool submit(csc_vertex_arrays& local, uint32_t strokes);
-  /** Hands an ended stroke to the session's undo (its vertices and their values before). */
-  void record_stroke(csc_vertex_arrays& local, const std::vector<uint32_t>& vertices,
-                     const std::vector<float>& before);
-  /** Undoes (or redoes) this artist's latest stroke in `local`, merged with everyone's work
-   *  since; false when there was none or it failed (noted). */
-  bool undo(csc_vertex_arrays& local, bool redo);
-  uint32_t undo_depth() const;
-  uint32_t redo_depth() const;
-  /** Re-sends while strokes are unacknowledged, once per sync interval (csculpt.h asks it). */
-  bool resubmit_due() const;
+  /** An ended stroke: its vertices and their values before and after it. */
+  void hand_stroke(const std::vector<uint32_t>& vertices, const std::vector<float>& before,
+                   const std::vector<float>& after);
+  /** Undoes (or redoes) this artist's latest stroke, merged with everyone's work since; the
+   *  result comes back through take_changes(). */
+  void request_step(bool redo);
+  /** What the session changed since the last call, once it includes everything handed. */
+  std::shared_ptr<const MeshChanges> take_changes();
+  /** Waits up to `timeout_ms` for everything handed to be merged into the mirror and sent. */
+  void settle(int timeout_ms);
   void leave();
 
-  csc_mesh* copy_base(std::string& error) const;
-  const char* invite() const { return session_ ? csc_session_invite(session_) : ""; }
-  uint64_t id() const { return csc_session_id(session_); }
-  uint64_t version() const { return csc_session_version(session_); }
-  const csc_session_stats& stats() const { return stats_; }
-  const std::vector<Peer>& peers() const { return peers_; }
-  const std::vector<Cursor>& cursors() const { return cursors_; }
-  /** How many peers' cursors were seen over the mesh during the session (the exit line). */
-  size_t presence_seen() const { return presence_seen_.size(); }
+  uint32_t undo_depth() const { return view_.undo_depth; }
+  uint32_t redo_depth() const { return view_.redo_depth; }
+  const char* invite() const { return view_.invite.c_str(); }
+  uint64_t id() const { return view_.id; }
+  uint64_t version() const { return view_.version; }
+  const csc_session_stats& stats() const { return view_.stats; }
+  const std::vector<Peer>& peers() const { return view_.peers; }
+  const std::vector<Cursor>& cursors() const { return view_.cursors; }
+  size_t presence_seen() const { return view_.presence_seen; }
   const std::vector<std::string>& messages() const { return messages_; }
   const std::string& status() const { return status_; }
-  bool attribution_colours(std::vector<float>& rgb, uint32_t vertex_count) const;
+  /** The latest attribution colours (3 per vertex); false while none came yet. */
+  bool attribution_colours(std::vector<float>& rgb);
 
  private:
   void note(std::string message);
-  void set_peer(uint64_t id, PeerState state);
-  void refresh_peers();
-  void refresh_cursors();
 
-  csc_session* session_ = nullptr;
-  csc_session_options options_ = CSC_SESSION_OPTIONS_INIT;
-  struct JoinResult {
-    csc_session* session = nullptr;
-    std::string error;
-  };
-  std::future<JoinResult> join_;
-  std::vector<Peer> peers_;
-  std::vector<Cursor> cursors_;
-  std::set<uint64_t> presence_seen_;
-  std::vector<std::string> messages_;  // the latest few, newest last
+  std::unique_ptr<SessionWorker> worker_;
+  bool joined_ = false;
+  SessionView view_;
+  std::vector<std::string> notes_, messages_;  // the app's own; with the worker's
   std::string status_ = "not in a session";
-  csc_session_stats stats_ = CSC_SESSION_STATS_INIT;
-  bool version_pending_ = false;
-  std::chrono::steady_clock::time_point last_submit_{};
 };

@@ -29,6 +29,7 @@ class StrokeHistory {
   /** The stroke end_stroke() last kept: its vertices and their values before it. */
   const std::vector<uint32_t>& last_vertices() const { return strokes_.back().vertices; }
   const std::vector<float>& last_before() const { return strokes_.back().before; }
+  const std::vector<float>& last_after() const { return strokes_.back().after; }
   bool has_last() const { return !strokes_.empty() && undo_count_ == strokes_.size(); }
 
  private:

@@ -1,0 +1,164 @@
+// The thread that talks to the session. Every csc_session_* call of the app runs here, on its
+// own mirror of the mesh's arrays, so a merge, a rebase, an undo merge, a late join's
+// snapshot or a failover never holds up a frame: the artist never waits.
+//
+// The UI thread hands over what the artist did (ended strokes, undo and redo, the cursor)
+// and takes back what changed in the mirror (the vertices whose values differ from what the
+// UI last took, with their values), but only while no stroke is under way and only once the
+// mirror holds every stroke handed so far, so the document and the mirror never disagree
+// about the artist's own work. A stroke reaches the mirror as its change: where the mirror
+// still holds the stroke's before-values it gets the after-values exactly; where a remote
+// version moved the vertex meanwhile, the change is added to it.
+#pragma once
+
+#include <csculpt.h>
+
+#include <array>
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <string>
+#include <thread>
+#include <vector>
+
+/** The arrays of a mesh as the app keeps them: positions, then each channel's values. */
+struct MeshArrays {
+  std::vector<float> positions;
+  std::vector<std::vector<float>> channels;
+  std::vector<uint32_t> widths;
+  std::vector<float> min_value, max_value;  // per channel: the range the session accepts
+  uint32_t stride() const;                  // floats per vertex over all of them
+  csc_vertex_arrays view();                 // valid until the next call
+  uint32_t vertex_count() const { return static_cast<uint32_t>(positions.size() / 3); }
+  void read(uint32_t v, float* out) const;
+  void write(uint32_t v, const float* in);
+  /** The arrays of `mesh` (a csc_mesh), with its channels' ranges. */
+  static MeshArrays of(const csc_mesh* mesh);
+
+ private:
+  std::vector<float*> pointers_;
+};
+
+/** What the panel and the scripts read: the session as the worker last saw it. */
+struct SessionView {
+  enum class PeerState { live, evasive, left };
+  struct Peer {
+    uint64_t id;
+    PeerState state;
+    std::string name;
+    bool merger = false;
+    uint64_t version = 0;
+    double latency_ms = -1;  // negative until measured
+  };
+  struct Cursor {  // another artist's brush, recent and over the mesh
+    uint64_t peer;
+    std::array<float, 3> position;  // mesh coordinates
+    float radius;                   // mesh units
+    bool active;                    // a stroke under way
+    std::array<float, 3> colour;    // RGB in [0,1]
+  };
+  std::string invite, status = "not in a session";
+  uint64_t id = 0, version = 0;
+  csc_session_stats stats = CSC_SESSION_STATS_INIT;
+  std::vector<Peer> peers;
+  std::vector<Cursor> cursors;
+  std::vector<std::string> messages;  // the latest few, newest last
+  size_t presence_seen = 0;           // peers whose cursor was seen over the mesh
+  uint32_t undo_depth = 0, redo_depth = 0;
+};
+
+/** Changed vertices and their values (stride floats each), as the UI applies them. */
+struct MeshChanges {
+  std::vector<uint32_t> vertices;
+  std::vector<float> values;
+  uint64_t includes = 0;  // the UI's commands (strokes, undo, redo) the values include
+};
+
+class SessionWorker {
+ public:
+  /** Starts on a session the UI created (hosting): `session` is handed over with `initial`,
+   *  the arrays it was created from. */
+  SessionWorker(csc_session* session, MeshArrays initial);
+  /** Starts joining `invite` on the worker; joined() and take_joined_mesh() tell the result. */
+  explicit SessionWorker(std::string invite);
+  ~SessionWorker();  // leaves the session and stops the thread
+  SessionWorker(const SessionWorker&) = delete;
+  SessionWorker& operator=(const SessionWorker&) = delete;
+
+  // ---- UI thread ------------------------------------------------------------------------
+  /** 0 while joining, 1 once in the session, -1 when the join failed (`error`). */
+  int state(std::string& error) const;
+  /** After a join: the session's mesh for the document (caller destroys), once. */
+  csc_mesh* take_joined_mesh();
+  /** An ended stroke: its vertices and their values before and after it (stride each). */
+  void hand_stroke(std::vector<uint32_t> vertices, std::vector<float> before,
+                   std::vector<float> after);
+  void request_step(bool redo);
+  void set_presence(const csc_presence& presence);
+  /** The changes the UI lacks, if the mirror includes every command handed and they were not
+   *  taken yet; else null. */
+  std::shared_ptr<const MeshChanges> take_changes();
+  /** Waits (up to `timeout_ms`) until every command handed is in the mirror and sent. */
+  void settle(int timeout_ms);
+  SessionView view() const;
+  /** The latest attribution colours (requests them from now on); false if none yet. */
+  bool attribution_colours(std::vector<float>& rgb);
+
+ private:
+  struct Command {  // what the UI did, in the order it did it
+    enum class Kind { stroke, undo, redo, taken } kind;
+    std::vector<uint32_t> vertices;  // a stroke's, with its values before and after
+    std::vector<float> before, after;
+    std::shared_ptr<const MeshChanges> changes;  // taken: what the UI applied
+  };
+  struct Inbox {
+    std::vector<Command> commands;
+    bool has_presence = false;
+    csc_presence presence = CSC_PRESENCE_INIT;
+    uint64_t handed = 0;  // strokes, undos and redos handed so far
+  };
+
+  void run(std::string invite);
+  bool join(const std::string& invite);
+  void loop();
+  void drain_inbox();
+  void apply_stroke(const Command& c);
+  void apply_step(bool redo);
+  bool poll_events();  // true when a merged version waits
+  void sync();         // update and submit
+  void refresh_view();
+  void publish();
+  void note(std::string message);
+  void finish();
+
+  // the worker's own state
+  csc_session* session_ = nullptr;
+  MeshArrays mirror_, shown_;  // the session's side; what the UI's document holds
+  uint32_t strokes_unsent_ = 0;
+  uint64_t done_ = 0;  // strokes, undos and redos applied to the mirror
+  bool dirty_ = true, attribution_stale_ = true;
+  std::chrono::steady_clock::time_point last_submit_{}, last_view_{};
+  std::set<uint64_t> presence_seen_;
+  SessionView local_view_;
+  std::vector<uint32_t> changed_scratch_;
+
+  // shared with the UI thread, under mutex_
+  mutable std::mutex mutex_;
+  std::condition_variable wake_;
+  Inbox inbox_;
+  std::shared_ptr<const MeshChanges> outbox_;
+  bool outbox_taken_ = false;
+  SessionView view_;
+  int state_ = 0;
+  std::string error_;
+  csc_mesh* joined_mesh_ = nullptr;
+  bool want_attribution_ = false;
+  std::shared_ptr<const std::vector<float>> attribution_;
+  bool stop_ = false;
+  uint64_t sent_through_ = 0;  // commands whose result was submitted
+
+  std::thread thread_;
+};
