@@ -91,6 +91,8 @@ bool App::open_window() {
   glfwSetKeyCallback(window_, key_callback);
   glfwSetCharCallback(window_, char_callback);
   glfwSetScrollCallback(window_, scroll_callback);
+  if (!tablet_.open(window_, tablet_status_)) tablet_status_ = "no pen: " + tablet_status_;
+  else tablet_status_ = std::to_string(tablet_.tablets()) + " pen device(s)";
   return true;
 }
 
@@ -225,6 +227,7 @@ void App::render(bool with_ui) {
 // One frame: input, replay, session, uploads, drawing. False when the app should quit.
 bool App::frame() {
   glfwPollEvents();
+  if (const std::optional<float> pressure = tablet_.poll()) on_pressure(*pressure);
   if (replay_.active()) replay_.step(*this);
   session_tick();
   if (attribution_view_ && !session_.active()) toggle_attribution_view();  // left: real colours back

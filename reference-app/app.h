@@ -21,6 +21,7 @@
 #include "replay.h"
 #include "sculptor.h"
 #include "session_link.h"
+#include "tablet_pressure.h"
 #include "stroke_history.h"
 
 int run_app(const AppOptions& options);
@@ -98,6 +99,8 @@ class App final : public InputHandlers {
   ViewSettings view_;
   ReplayPlayer replay_;
   SessionLink session_;
+  TabletPressure tablet_;
+  std::string tablet_status_;  // shown beside the pressure settings
 
   // Input state. The press uses the position of the last cursor event, never a live
   // glfwGetCursorPos (which races with a fast xdotool drag: see the Debian notes).

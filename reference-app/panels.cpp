@@ -83,6 +83,7 @@ void App::draw_tool_panel() {
   ImGui::Checkbox("radius", &brush_.pressure_radius);
   ImGui::SameLine();
   ImGui::Checkbox("strength", &brush_.pressure_strength);
+  ImGui::TextDisabled("%s", tablet_status_.c_str());
 
   section("Paint");
   int channel = static_cast<int>(brush_.paint_channel);

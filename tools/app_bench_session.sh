@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
 # csculpt-app's frame times while merges arrive (issue 11: "3 csculpt peer processes on the
 # same machine"): the app hosts a session on a 320K-face sphere, three simulated artists join
-# and sculpt, and the app's --bench-frames JSON lines report the frames meanwhile.
+# and sculpt, and the app's --bench-frames JSON lines report the frames meanwhile. While the
+# frames are measured a fourth artist joins late (a snapshot is sent, the newcomer's edits
+# rebased) and two of the first three are killed (whichever merged: a failover), so the
+# frame_ms_max figures cover "a merge, a rebase, a late join or a failover".
 #   tools/app_bench_session.sh APP CSCULPT [FRAMES] [FACES]
 set -euo pipefail
 if [ "${1:-}" != --inside ]; then
@@ -16,7 +19,18 @@ mkfifo "$work/out"
 exec 3< "$work/out"
 read -r line <&3
 invite=${line#INVITE }
+pids=()
 for seed in 1 2 3; do
   "$cli" peer --join "$invite" --seed "$seed" --seconds 60 --linger 1 --ignore-stdin > /dev/null 2>&1 &
+  pids+=($!)
 done
+# The faults, timed from the end of the app's 4 s warm-up.
+(
+  sleep 6
+  "$cli" peer --join "$invite" --seed 4 --seconds 60 --linger 1 --ignore-stdin > /dev/null 2>&1 &
+  sleep 3
+  kill -9 "${pids[0]}" 2>/dev/null || true
+  sleep 3
+  kill -9 "${pids[1]}" 2>/dev/null || true
+) &
 cat <&3
