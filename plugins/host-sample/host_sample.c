@@ -71,8 +71,8 @@ static double now_s(void) {
 }
 
 /* A deterministic pseudo-random number in [0, 1): the strokes depend on --seed only. */
-static float rnd(unsigned long* state) {
-  *state = *state * 6364136223846793005UL + 1442695040888963407UL;
+static float rnd(uint64_t* state) {
+  *state = *state * 6364136223846793005ULL + 1442695040888963407ULL;
   return (float)((*state >> 40) & 0xFFFFFF) / 16777216.f;
 }
 
@@ -165,7 +165,7 @@ static int scene_adopt(scene* sc, csc_mesh* mesh) {
 
 /* The start of a stroke: the vertices within the brush radius of a random centre, and their
  * values now (all channels, the session mesh's order): what record_stroke needs at the end. */
-static void stroke_begin(stroke* st, const scene* sc, unsigned long* rng) {
+static void stroke_begin(stroke* st, const scene* sc, uint64_t* rng) {
   const float diag = csc_mesh_bbox_diagonal(sc->layout), radius = 0.2f * diag;
   const float* cp;
   uint32_t v, c, k;
@@ -210,8 +210,8 @@ static const char* const kEventNames[] = {"joined",       "version",   "peer_joi
                                           "peer_evasive", "peer_left", "merger_changed",
                                           "dropped",      "error",     "peer_live"};
 
-/* Prints what the session reports; a DCC shows it in its status bar or peer list. Returns 1
- * when a merged version is waiting for csc_session_update. */
+/* Prints what the session reports (a DCC shows it in its status bar or peer list) and notes
+ * a merged version waiting for csc_session_update. Returns 1 if polling failed. */
 static int poll_events(csc_session* s, int* version_pending) {
   csc_session_event e = CSC_SESSION_EVENT_INIT;
   int32_t has = 0;
@@ -219,10 +219,11 @@ static int poll_events(csc_session* s, int* version_pending) {
     CHECK(csc_session_poll(s, &e, &has));
     if (!has) return 0;
     if (e.kind == CSC_EVENT_VERSION) *version_pending = 1;
-    printf("EVENT %s peer=%llu version=%llu%s%s\n",
-           (unsigned)e.kind < 9 ? kEventNames[e.kind] : "unknown", (unsigned long long)e.peer,
-           (unsigned long long)e.version, e.message && *e.message ? " message=" : "",
-           e.message ? e.message : "");
+    printf(
+        "EVENT %s peer=%llu version=%llu%s%s\n",
+        (size_t)e.kind < sizeof kEventNames / sizeof *kEventNames ? kEventNames[e.kind] : "unknown",
+        (unsigned long long)e.peer, (unsigned long long)e.version,
+        e.message && *e.message ? " message=" : "", e.message ? e.message : "");
   }
 }
 
@@ -293,13 +294,12 @@ static int save_scene(const scene* sc, const char* path) {
   return 0;
 }
 
-/* The "undo" line: the undone stroke's centre vertex before the stroke and now, so a test
- * can check where it lands on the other peers. */
-static void report_undo(const stroke* st, const scene* sc, uint32_t changed) {
-  const float *b = &st->before[(size_t)st->centre_index * sc->stride],
-              *p = &sc->positions[3 * st->centre];
-  printf("UNDO vertices=%u centre=%u before=%.9g,%.9g,%.9g after=%.9g,%.9g,%.9g\n", changed,
-         st->centre, b[0], b[1], b[2], p[0], p[1], p[2]);
+/* The undo line: the undone stroke's centre vertex before the stroke and as the stroke left
+ * it (`after`, taken before the undo), so a test can check where it lands on the others. */
+static void report_undo(const stroke* st, const scene* sc, const float* after, uint32_t n) {
+  const float* b = &st->before[(size_t)st->centre_index * sc->stride];
+  printf("UNDO vertices=%u centre=%u before=%.9g,%.9g,%.9g after=%.9g,%.9g,%.9g\n", n, st->centre,
+         b[0], b[1], b[2], after[0], after[1], after[2]);
 }
 
 /* The session's life: host or join, the loop, the final line. Handles are left in `sc` and
@@ -308,7 +308,7 @@ static int run(const options* o, scene* sc, stroke* st, csc_session** s) {
   csc_mesh* mesh = NULL;
   csc_session_options so = CSC_SESSION_OPTIONS_INIT;
   csc_session_stats stats = CSC_SESSION_STATS_INIT;
-  unsigned long rng = 0x9E3779B97F4A7C15UL ^ o->seed;
+  uint64_t rng = 0x9E3779B97F4A7C15ULL ^ o->seed;
   unsigned made = 0, undone = 0;
   uint32_t strokes_unsent = 0, applied, k;
   int in_stroke = 0, version_pending = 0;
@@ -375,8 +375,10 @@ static int run(const options* o, scene* sc, stroke* st, csc_session** s) {
     if (o->undo_last && !undone && made == o->strokes && !in_stroke && !strokes_unsent &&
         stats.strokes_acknowledged == stats.strokes_submitted) {
       uint32_t n;
+      float after[3];
+      memcpy(after, &sc->positions[3 * st->centre], sizeof after);
       CHECK(csc_session_undo(*s, &sc->arrays, NULL, &n)); /* a DCC redraws the n vertices */
-      report_undo(st, sc, n);
+      report_undo(st, sc, after, n);
       undone = 1, strokes_unsent += n > 0; /* sent like a stroke */
     }
     /* 4. Submit between strokes, at least once per sync interval while edits are unmerged. */

@@ -69,8 +69,17 @@ class Sample:
                                  f"{self.lines[-5:]}")
         self.reader.join(10)
         err = self.proc.stderr.read()
+        self.close()
         final = self.find("FINAL")
         return self.proc.returncode, fields(final[0]) if final else None, err
+
+    def close(self):
+        if self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait()
+        self.reader.join(10)
+        for f in (self.proc.stdout, self.proc.stderr):
+            f.close()
 
 
 def fields(line):
@@ -123,8 +132,8 @@ class HostSample(unittest.TestCase):
             p_final = peer.summary(30)
         finally:
             for p in (a, b):
-                if p and p.proc.poll() is None:
-                    p.proc.kill()
+                if p:
+                    p.close()
             if peer:
                 peer.stop()
 
