@@ -10,9 +10,9 @@
  *   host-sample [--host | --join INVITE] [--mesh FILE] [--seconds S] [--linger S]
  *               [--strokes N] [--seed N] [--undo-last] [--out FILE.ply]
  *
- * Everything goes through csculpt.h and libcsculpt.so: no C++ SDK header. The loop body
- * (host_tick) is what a DCC puts in its idle or timer callback; docs/c-api.md, "The host loop
- * in a real DCC", walks through it.
+ * Everything goes through csculpt.h and libcsculpt.so: no C++ SDK header. The body of the
+ * loop in run() is what a DCC puts in its idle or timer callback; docs/c-api.md, "The host
+ * loop in a real DCC", walks through it.
  */
 #define _POSIX_C_SOURCE 200112L /* clock_gettime, nanosleep */
 #include <math.h>
@@ -232,34 +232,24 @@ static int parse_args(int argc, char** argv, options* o) {
   o->join = o->mesh = o->out = NULL, o->seconds = 2, o->linger = 1, o->strokes = 3, o->seed = 1;
   o->undo_last = 0;
   for (i = 1; i < argc; ++i) {
-    const char* a = argv[i];
-    int more = i + 1 < argc;
-    if (!strcmp(a, "--host"))
-      host = 1;
-    else if (!strcmp(a, "--undo-last"))
-      o->undo_last = 1;
-    else if (more && !strcmp(a, "--join"))
-      o->join = argv[++i];
-    else if (more && !strcmp(a, "--mesh"))
-      o->mesh = argv[++i];
-    else if (more && !strcmp(a, "--out"))
-      o->out = argv[++i];
-    else if (more && !strcmp(a, "--seconds"))
-      o->seconds = atof(argv[++i]);
-    else if (more && !strcmp(a, "--linger"))
-      o->linger = atof(argv[++i]);
-    else if (more && !strcmp(a, "--strokes"))
-      o->strokes = (unsigned)atoi(argv[++i]);
-    else if (more && !strcmp(a, "--seed"))
-      o->seed = (unsigned)atoi(argv[++i]);
+#define VALUE_OF(name) (i + 1 < argc && !strcmp(argv[i], name) && ++i)
+    /* clang-format off */
+    if (!strcmp(argv[i], "--host")) host = 1;
+    else if (!strcmp(argv[i], "--undo-last")) o->undo_last = 1;
+    else if (VALUE_OF("--join")) o->join = argv[i];
+    else if (VALUE_OF("--mesh")) o->mesh = argv[i];
+    else if (VALUE_OF("--out")) o->out = argv[i];
+    else if (VALUE_OF("--seconds")) o->seconds = atof(argv[i]);
+    else if (VALUE_OF("--linger")) o->linger = atof(argv[i]);
+    else if (VALUE_OF("--strokes")) o->strokes = (unsigned)atoi(argv[i]);
+    else if (VALUE_OF("--seed")) o->seed = (unsigned)atoi(argv[i]);
     else {
-      fprintf(stderr,
-              "host-sample: bad argument '%s'\nusage: host-sample [--host | --join INVITE] "
-              "[--mesh FILE] [--seconds S] [--linger S] [--strokes N] [--seed N] [--undo-last] "
-              "[--out FILE.ply]\n",
-              a);
+      fprintf(stderr, "host-sample: bad argument '%s'\nusage: host-sample [--host | --join "
+              "INVITE] [--mesh FILE] [--seconds S] [--linger S] [--strokes N] [--seed N] "
+              "[--undo-last] [--out FILE.ply]\n", argv[i]);
       return 1;
     }
+    /* clang-format on */
   }
   if (host == (o->join != NULL) || (o->join && o->mesh)) {
     fprintf(stderr, "host-sample: give --host (optionally with --mesh) or --join INVITE\n");
