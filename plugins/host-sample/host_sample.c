@@ -303,6 +303,7 @@ static int run(const options* o, scene* sc, stroke* st, csc_session** s) {
   uint32_t strokes_unsent = 0, applied, k;
   int in_stroke = 0, version_pending = 0;
   double start, last_submit = 0, idle_since = -1;
+  const struct timespec frame = {0, 16000000L}; /* ~60 Hz */
   so.name = "host-sample";
 
   /* Host: the artist's current mesh becomes version 0. Join: the session's mesh replaces
@@ -394,10 +395,7 @@ static int run(const options* o, scene* sc, stroke* st, csc_session** s) {
       fprintf(stderr, "host-sample: the session did not take this host's edits in 60 s\n");
       return 1;
     }
-    {
-      const struct timespec frame = {0, 16000000L};
-      nanosleep(&frame, NULL);
-    }
+    nanosleep(&frame, NULL); /* a DCC returns from its callback here instead */
   }
   printf("FINAL version=%llu digest=%016llx strokes=%u submitted=%llu acknowledged=%llu\n",
          (unsigned long long)csc_session_version(*s), (unsigned long long)scene_digest(sc), made,

@@ -112,8 +112,8 @@ class HostSample(unittest.TestCase):
         started = time.time()
         tmp = tempfile.mkdtemp(prefix="host_sample_")
         a_out, b_out = os.path.join(tmp, "a.ply"), os.path.join(tmp, "b.ply")
-        # A hosts and strokes at once; it leaves after 4 s without a new version.
-        a = Sample("--host", "--strokes", "3", "--seconds", "2", "--seed", "1", "--linger", "4",
+        # A hosts and strokes at once; it leaves after 5 s without a new version.
+        a = Sample("--host", "--strokes", "3", "--seconds", "2", "--seed", "1", "--linger", "5",
                    "--out", a_out)
         peer = b = None
         try:
