@@ -449,7 +449,9 @@ typedef struct csc_session_options {
   const char* bind; /**< ZeroMQ endpoint to listen on; NULL: "tcp://127.0.0.1:*" (free port) */
   const char* name; /**< shown to others; NULL: "" */
   uint64_t id;      /**< this peer's id (the lowest live id merges); 0: random */
-  uint32_t sync_ms; /**< merge interval in ms, at least 1 (the paper used 5 s and 20 s) */
+  /** The least time between two merges in ms, at least 1: the merger merges as soon as a
+   *  submit is in and merges a burst within the interval together (the paper: 5 s, 20 s). */
+  uint32_t sync_ms;
   uint32_t heartbeat_ms;
   uint32_t evasive_ms;       /**< silent this long: reported evasive */
   uint32_t expired_ms;       /**< silent this long: gone (a new merger is elected) */
@@ -458,7 +460,7 @@ typedef struct csc_session_options {
   uint32_t join_timeout_ms;  /**< csc_session_join waits this long for the snapshot */
 } csc_session_options;
 #define CSC_SESSION_OPTIONS_INIT \
-  { sizeof(csc_session_options), NULL, NULL, 0, 250, 200, 600, 1200, 1e-5, 1e-4, 30000 }
+  { sizeof(csc_session_options), NULL, NULL, 0, 50, 200, 600, 1200, 1e-5, 1e-4, 30000 }
 
 /** Starts a session on `mesh` (copied; it becomes version 0). `options` may be NULL. Fails with
  *  CSC_ERROR_IO if the endpoint cannot be bound. */

@@ -71,7 +71,7 @@ std::string PeerNode::invite_text() const {
 
 void PeerNode::loop() {
   next_heartbeat_ = Clock::now();
-  next_merge_ = Clock::now() + options_.sync;
+  last_merge_ = Clock::now();  // the first merge one interval after the start, at the earliest
   while (true) {
     try {
       transport_.wait(next_deadline() - Clock::now());
@@ -88,13 +88,18 @@ void PeerNode::loop() {
   if (joined_) broadcast(leave_message(header()));
 }
 
-/// The earliest timer: the heartbeat, our presence, and the merge while we are the merger.
+/// The earliest timer: the heartbeat, our presence, and, while we are the merger and hold
+/// submits, the next merge.
 Clock::time_point PeerNode::next_deadline() const {
   const auto [changed, any] = host_.presence_state();
   // Before the mesh came there is nobody to show a cursor to (and the timer would be past).
   const Clock::time_point t =
       joined_ ? std::min(next_heartbeat_, presence_.next_send(changed, any)) : next_heartbeat_;
-  return election_.is_merger() ? std::min(t, next_merge_) : t;
+  return merge_waiting() ? std::min(t, last_merge_ + options_.sync) : t;
+}
+
+bool PeerNode::merge_waiting() const {
+  return election_.is_merger() && merger_ && !merger_->empty();
 }
 
 void PeerNode::receive_all() {
@@ -122,8 +127,11 @@ void PeerNode::run_timers(Clock::time_point now) {
     next_heartbeat_ = now + options_.membership.heartbeat;
     heartbeat(now);
   }
-  if (election_.is_merger() && now >= next_merge_) {
-    next_merge_ = now + options_.sync;
+  // Merges as soon as a submit is in, at most once per sync interval: an edit waits for no
+  // tick, and a burst of submits arriving during one interval is merged together. Attempted
+  // merges count (a merger catching up tries again one interval later, not in a busy loop).
+  if (merge_waiting() && now >= last_merge_ + options_.sync) {
+    last_merge_ = now;
     merge_pending();
   }
   send_presence(now);

@@ -60,6 +60,7 @@ class PeerNode {
  private:
   // the loop
   void loop();
+  bool merge_waiting() const;
   Clock::time_point next_deadline() const;
   void receive_all();
   bool run_commands();
@@ -147,7 +148,7 @@ class PeerNode {
 
   // rate limits
   Clock::time_point next_heartbeat_{};         // the membership timer (greetings while joining)
-  Clock::time_point next_merge_{};             // the merger's sync timer
+  Clock::time_point last_merge_{};             // the merger's last merge (or attempt)
   Clock::time_point next_fetch_{};             // one fetch per heartbeat interval
   Clock::time_point next_join_hello_{};        // one greeting per snapshot's expected time
   Clock::time_point next_divergence_check_{};  // one snapshot request per 4 heartbeats

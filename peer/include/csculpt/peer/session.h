@@ -35,9 +35,10 @@ struct SessionOptions {
   std::string name;
   /// This peer's id (the election picks the lowest live id); 0 = random.
   PeerId id = 0;
-  /// The merger merges this often (at least 1 ms, see validate_options; the paper used 5 s and 20
-  /// s).
-  Millis sync{250};
+  /// The least time between two merges: the merger merges as soon as a submit is in, and a
+  /// burst arriving within the interval is merged together (at least 1 ms, validate_options;
+  /// the paper merged every 5 s and 20 s).
+  Millis sync{50};
   MembershipOptions membership;
   /// Wire tolerances of submitted and merged diffs (see wire.h); with position_scale 0 the
   /// position tolerance is relative to the session's frame (the first mesh's bounding-box
