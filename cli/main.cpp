@@ -39,6 +39,18 @@ struct MergeCommand {
   std::vector<std::string> ideals;
 };
 
+/// Hierarchy::build, with running out of memory reported as the README's error line naming the
+/// file it was building for.
+Hierarchy build_hierarchy_of(const Mesh& mesh, const HierarchyOptions& options,
+                             const std::string& path) {
+  try {
+    return Hierarchy::build(mesh, options);
+  } catch (const std::bad_alloc&) {
+    throw OutOfMemory(path + ": out of memory building the hierarchy of its " +
+                      std::to_string(mesh.vertex_count()) + " vertices");
+  }
+}
+
 int run_merge(const MergeCommand& c) {
   const MergeMethod method = merge_method_from_string(c.method);
   const Mesh base = read_mesh(c.base);
@@ -53,7 +65,7 @@ int run_merge(const MergeCommand& c) {
   }
   HierarchyOptions options;
   options.max_parents = c.k;
-  const Hierarchy hierarchy = Hierarchy::build(base, options);
+  const Hierarchy hierarchy = build_hierarchy_of(base, options, c.base);
   Merger merger(hierarchy);
   const auto t0 = std::chrono::steady_clock::now();
   const Diff merged = merger.merge(base, diffs, method);
@@ -78,7 +90,7 @@ int run_hierarchy(const std::string& path, std::uint32_t k) {
   HierarchyOptions options;
   options.max_parents = k;
   const auto t0 = std::chrono::steady_clock::now();
-  const Hierarchy h = Hierarchy::build(mesh, options);
+  const Hierarchy h = build_hierarchy_of(mesh, options, path);
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   std::string json = to_json(h.stats());

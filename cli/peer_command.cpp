@@ -152,8 +152,8 @@ std::string_view kind_name(peer::EventKind k) {
 /// What a state line reports; a line is printed whenever any of it changes.
 struct State {
   std::uint64_t version = 0, digest = 0, base_digest = 0, strokes = 0, unacknowledged = 0,
-                acknowledged = 0, dropped = 0, stale = 0, auth_rejected = 0, merger = 0, epoch = 0,
-                members = 0;
+                acknowledged = 0, dropped = 0, stale = 0, auth_rejected = 0, abandoned = 0,
+                merger = 0, epoch = 0, members = 0;
   bool editing = false;
   friend bool operator==(const State&, const State&) = default;
 };
@@ -222,6 +222,7 @@ State read_state(const peer::Session& session, SimulatedArtist& artist, bool edi
   s.dropped = st.messages_dropped;
   s.stale = st.stale_ignored;
   s.auth_rejected = st.auth_rejected;
+  s.abandoned = st.handshakes_abandoned;
   s.merger = st.merger;
   s.epoch = st.epoch;
   s.members = st.members;
@@ -242,6 +243,7 @@ void print_state(const State& s, peer::PeerId self) {
       .num("messages_dropped", s.dropped)
       .num("stale_ignored", s.stale)
       .num("auth_rejected", s.auth_rejected)
+      .num("handshakes_abandoned", s.abandoned)
       .num("merger", s.merger)
       .num("epoch", s.epoch)
       .num("members", s.members)
@@ -316,6 +318,7 @@ void print_summary(const peer::Session& session, const Mesh& local, std::uint32_
       .num("messages_dropped", st.messages_dropped)
       .num("stale_ignored", st.stale_ignored)
       .num("auth_rejected", st.auth_rejected)
+      .num("handshakes_abandoned", st.handshakes_abandoned)
       .num("snapshots_sent", st.snapshots_sent)
       .num("fetches", st.fetches)
       .num("epoch", st.epoch)

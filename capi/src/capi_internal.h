@@ -103,6 +103,8 @@ csc_status guarded(const char* function, Body&& body) noexcept {
     return fail(CSC_ERROR_INVALID_INPUT, std::string(function) + ": " + e.what());
   } catch (const IoError& e) {
     return fail(CSC_ERROR_IO, std::string(function) + ": " + e.what());
+  } catch (const OutOfMemory& e) {
+    return fail(CSC_ERROR_OUT_OF_MEMORY, std::string(function) + ": " + e.what());
   } catch (const std::bad_alloc&) {
     return fail(CSC_ERROR_OUT_OF_MEMORY, std::string(function) + ": out of memory");
   } catch (const std::exception& e) {

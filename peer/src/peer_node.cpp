@@ -139,6 +139,7 @@ void PeerNode::run_timers(Clock::time_point now) {
 
 void PeerNode::publish_stats() {
   const std::uint64_t rejected = transport_.take_auth_rejected();
+  const std::uint64_t abandoned = transport_.take_handshakes_abandoned();
   host_.update_stats([&](SessionStats& s) {
     s.id = self_;
     s.version = replication_.version();
@@ -146,6 +147,7 @@ void PeerNode::publish_stats() {
     s.merger = election_.merger().value_or(0);
     s.members = static_cast<std::uint32_t>(membership_.members().size());
     s.auth_rejected += rejected;
+    s.handshakes_abandoned += abandoned;
   });
   host_.set_peers(peer_table_.list(membership_, election_.merger(), reported_));
 }

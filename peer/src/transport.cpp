@@ -12,6 +12,7 @@
 #include <cstring>
 
 #include "csculpt/error.h"
+#include "fd_limit.h"
 
 namespace csculpt::peer {
 namespace {
@@ -122,6 +123,7 @@ zmq::socket_t curve_dealer(zmq::context_t& context, const std::string& endpoint,
 Transport::Transport(const Invite& invite, PeerId self, const std::string& bind,
                      std::size_t max_message_bytes)
     : self_(self), invite_(invite), max_message_bytes_(max_message_bytes) {
+  raise_fd_limit();
   server_public_ = curve_public(invite.server_secret);
   client_public_ = curve_public(invite.client_secret);
   if (::pipe(wake_pipe_) != 0) throw IoError("creating the network thread's wake-up pipe failed");
@@ -137,6 +139,8 @@ Transport::Transport(const Invite& invite, PeerId self, const std::string& bind,
     router_.set(zmq::sockopt::maxmsgsize, static_cast<std::int64_t>(max_message_bytes));
     router_.set(zmq::sockopt::linger, 0);
     router_.set(zmq::sockopt::rcvhwm, 100000);
+    router_.set(zmq::sockopt::handshake_ivl, static_cast<int>(kHandshakeTimeout.count()));
+    monitor_.emplace(context_, router_);
     router_.bind(bind);
     endpoint_ = advertised_endpoint(router_.get(zmq::sockopt::last_endpoint));
   } catch (const zmq::error_t& e) {
@@ -177,16 +181,18 @@ bool Transport::send(const std::string& endpoint, std::span<const std::uint8_t> 
 void Transport::wait(Clock::duration timeout) {
   zmq::pollitem_t items[] = {{router_.handle(), 0, ZMQ_POLLIN, 0},
                              {zap_.handle(), 0, ZMQ_POLLIN, 0},
-                             {nullptr, wake_pipe_[0], ZMQ_POLLIN, 0}};
+                             {nullptr, wake_pipe_[0], ZMQ_POLLIN, 0},
+                             {monitor_->handle(), 0, ZMQ_POLLIN, 0}};
   const auto ms =
       std::chrono::ceil<std::chrono::milliseconds>(std::max(Clock::duration::zero(), timeout));
   try {
-    zmq::poll(items, 3, ms);
+    zmq::poll(items, 4, ms);
   } catch (const zmq::error_t& e) {
     if (e.num() == EINTR) return;
     fail("waiting for messages", e);
   }
   if (items[1].revents & ZMQ_POLLIN) serve_zap();
+  if (items[3].revents & ZMQ_POLLIN) monitor_->drain();
   if (items[2].revents & ZMQ_POLLIN) {
     char drain[64];
     while (::read(wake_pipe_[0], drain, sizeof drain) > 0) {
@@ -217,9 +223,13 @@ void Transport::wake() {
 }
 
 std::uint64_t Transport::take_auth_rejected() {
-  const std::uint64_t n = auth_rejected_;
+  const std::uint64_t n = auth_rejected_ + monitor_->take_rejected();
   auth_rejected_ = 0;
   return n;
+}
+
+std::uint64_t Transport::take_handshakes_abandoned() {
+  return monitor_->take_abandoned();
 }
 
 void Transport::serve_zap() {

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -15,6 +16,7 @@
 
 #include "csculpt/peer/membership.h"
 #include "csculpt/peer/session.h"
+#include "handshake_monitor.h"
 
 namespace csculpt::peer {
 
@@ -63,7 +65,8 @@ struct Inbound {
 class Transport {
  public:
   /// Binds the ROUTER to `bind` (port * picks a free one) with the invite's CURVE keys and
-  /// starts answering ZAP requests. Throws IoError naming the endpoint that failed.
+  /// starts answering ZAP requests; raises the process's open-file limit (raise_fd_limit).
+  /// Throws IoError naming the endpoint that failed.
   Transport(const Invite& invite, PeerId self, const std::string& bind,
             std::size_t max_message_bytes);
   ~Transport();
@@ -86,7 +89,8 @@ class Transport {
   template <class Keep>
   void close_departed(Keep&& keep, Clock::time_point now, Clock::duration linger);
 
-  /// Sleeps until a message arrives, a ZAP request (served here), wake() or `timeout`.
+  /// Sleeps until a message arrives, a ZAP request (served here), a handshake event (counted
+  /// here), wake() or `timeout`.
   void wait(Clock::duration timeout);
   /// The next received message, without waiting; false when there is none. A message of more
   /// than one frame keeps its first payload frame (a well-behaved peer sends one).
@@ -94,8 +98,17 @@ class Transport {
   /// Wakes wait() from any thread (one byte into a pipe: no lock, no ZeroMQ socket shared).
   void wake();
 
-  /// Connections refused by the ZAP handler since the last call.
+  /// Connections refused since the last call: by the ZAP handler (a wrong client key) or by
+  /// the CURVE handshake itself (a wrong server key, another mechanism, garbage).
   std::uint64_t take_auth_rejected();
+  /// Connections closed since the last call before they completed a handshake: clients that
+  /// connected and said nothing for kHandshakeTimeout, or hung up midway.
+  std::uint64_t take_handshakes_abandoned();
+
+  /// ZMQ_HANDSHAKE_IVL of the ROUTER. A CURVE handshake is three round trips, milliseconds on
+  /// a LAN and about 2.2 s at a 400 ms round trip with one lost packet (a 1 s retransmission);
+  /// an unauthenticated connection holds a descriptor for no longer than this.
+  static constexpr std::chrono::milliseconds kHandshakeTimeout{3000};
 
  private:
   void serve_zap();
@@ -106,13 +119,14 @@ class Transport {
   CurveKey client_public_{};  // the only client key ZAP admits
   std::size_t max_message_bytes_;
   zmq::context_t context_{1};
-  zmq::socket_t zap_;     // inproc ZAP handler: bound before any CURVE socket
-  zmq::socket_t router_;  // where every peer's DEALER sends to us
+  zmq::socket_t zap_;                        // inproc ZAP handler: bound before any CURVE socket
+  zmq::socket_t router_;                     // where every peer's DEALER sends to us
+  std::optional<HandshakeMonitor> monitor_;  // of router_'s handshakes
   std::map<std::string, zmq::socket_t> dealers_;       // endpoint -> our DEALER to it
   std::map<std::string, Clock::time_point> departed_;  // endpoint -> since when `keep` said no
   std::string endpoint_;
-  int wake_pipe_[2] = {-1, -1};  // [0] polled by wait(), [1] written by wake()
-  std::uint64_t auth_rejected_ = 0;
+  int wake_pipe_[2] = {-1, -1};      // [0] polled by wait(), [1] written by wake()
+  std::uint64_t auth_rejected_ = 0;  // by the ZAP handler
 };
 
 template <class Keep>

@@ -29,44 +29,6 @@ struct FileCloser {
   void operator()(std::FILE* f) const { std::fclose(f); }
 };
 
-std::string read_file(const std::string& path) {
-  std::error_code ec;
-  const auto status = std::filesystem::status(path, ec);
-  if (ec || !std::filesystem::exists(status)) {
-    throw IoError(cat(path, ": cannot open: ", ec ? ec.message() : "no such file"));
-  }
-  if (std::filesystem::is_directory(status)) throw IoError(cat(path, ": is a directory"));
-  std::uintmax_t expected = 0;
-  if (std::filesystem::is_regular_file(status)) {
-    const std::uintmax_t size = std::filesystem::file_size(path, ec);
-    if (!ec && size > kMaxFileBytes) {
-      throw InvalidInput(cat(path, ": file is ", size, " bytes, more than the 2 GiB limit"));
-    }
-    if (!ec) expected = size;
-  }
-  std::unique_ptr<std::FILE, FileCloser> f(std::fopen(path.c_str(), "rb"));
-  if (!f) throw IoError(cat(path, ": cannot open: ", errno_message(errno)));
-  std::string bytes;
-  // One chunk of slack so that reading up to the expected size does not reallocate.
-  bytes.reserve(static_cast<std::size_t>(expected) + (std::size_t{1} << 20));
-  constexpr std::size_t kChunk = std::size_t{1} << 20;
-  for (;;) {
-    const std::size_t old = bytes.size();
-    // Read in chunks rather than trusting the size above: the file may be a pipe or change.
-    bytes.resize(old + kChunk);
-    const std::size_t got = std::fread(bytes.data() + old, 1, kChunk, f.get());
-    bytes.resize(old + got);
-    if (bytes.size() > kMaxFileBytes) {
-      throw InvalidInput(cat(path, ": file is more than the 2 GiB limit"));
-    }
-    if (got < kChunk) {
-      if (std::ferror(f.get())) throw IoError(cat(path, ": read error: ", errno_message(errno)));
-      break;
-    }
-  }
-  return bytes;
-}
-
 std::string extension_of(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   if (!ext.empty() && ext[0] == '.') ext.erase(0, 1);
@@ -74,6 +36,10 @@ std::string extension_of(const std::string& path) {
     if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
   }
   return ext;
+}
+
+bool is_known_extension(const std::string& ext) {
+  return ext == "ply" || ext == "obj" || ext == "off" || ext == "stl";
 }
 
 bool starts_with_ci(std::string_view s, std::string_view prefix) {
@@ -112,6 +78,63 @@ std::string sniff(std::string_view bytes) {
   return {};
 }
 
+/// Appends what `f` holds to `bytes`, in chunks rather than trusting a size: the file may be
+/// a pipe or change. The buffer never grows past the limit (plus a chunk), and a stream whose
+/// first chunk is not recognisably a mesh (zeros or random bytes piped in) is refused at once
+/// rather than read for gigabytes.
+void read_chunks(std::FILE* f, const std::string& path, bool stream, std::string& bytes) {
+  constexpr std::size_t kChunk = std::size_t{1} << 20;
+  for (;;) {
+    const std::size_t old = bytes.size();
+    if (bytes.capacity() < old + kChunk) {
+      bytes.reserve(std::min<std::size_t>(std::max(2 * bytes.capacity(), old + kChunk),
+                                          kMaxFileBytes + kChunk));
+    }
+    bytes.resize(old + kChunk);
+    const std::size_t got = std::fread(bytes.data() + old, 1, kChunk, f);
+    bytes.resize(old + got);
+    if (bytes.size() > kMaxFileBytes) {
+      throw InvalidInput(cat(path, ": file is more than the 2 GiB limit"));
+    }
+    if (got < kChunk) {
+      if (std::ferror(f)) throw IoError(cat(path, ": read error: ", errno_message(errno)));
+      return;
+    }
+    if (stream && old == 0 && !is_known_extension(extension_of(path)) && sniff(bytes).empty()) {
+      throw InvalidInput(cat(path, ": not a regular file, and its first ", bytes.size(),
+                             " bytes are not a mesh file"));
+    }
+  }
+}
+
+std::string read_file(const std::string& path) {
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (ec || !std::filesystem::exists(status)) {
+    throw IoError(cat(path, ": cannot open: ", ec ? ec.message() : "no such file"));
+  }
+  if (std::filesystem::is_directory(status)) throw IoError(cat(path, ": is a directory"));
+  if (std::filesystem::is_character_file(status) || std::filesystem::is_block_file(status)) {
+    // /dev/zero, /dev/urandom, a disk: endless or huge, never a mesh; pipes are read.
+    throw InvalidInput(cat(path, ": is a device, not a mesh file"));
+  }
+  std::uintmax_t expected = 0;
+  if (std::filesystem::is_regular_file(status)) {
+    const std::uintmax_t size = std::filesystem::file_size(path, ec);
+    if (!ec && size > kMaxFileBytes) {
+      throw InvalidInput(cat(path, ": file is ", size, " bytes, more than the 2 GiB limit"));
+    }
+    if (!ec) expected = size;
+  }
+  std::unique_ptr<std::FILE, FileCloser> f(std::fopen(path.c_str(), "rb"));
+  if (!f) throw IoError(cat(path, ": cannot open: ", errno_message(errno)));
+  std::string bytes;
+  // One chunk of slack so that reading up to the expected size does not reallocate.
+  bytes.reserve(static_cast<std::size_t>(expected) + (std::size_t{1} << 20));
+  read_chunks(f.get(), path, !std::filesystem::is_regular_file(status), bytes);
+  return bytes;
+}
+
 void write_atomically(const std::string& path, std::string_view data) {
   // Unique per process and call, so concurrent writers of the same path cannot collide on
   // the temporary; the final rename is atomic on POSIX.
@@ -143,12 +166,10 @@ void write_atomically(const std::string& path, std::string_view data) {
   }
 }
 
-}  // namespace
-
-Mesh read_mesh(const std::string& path) {
+Mesh read_format(const std::string& path) {
   const std::string bytes = read_file(path);
   std::string format = extension_of(path);
-  if (format != "ply" && format != "obj" && format != "off" && format != "stl") {
+  if (!is_known_extension(format)) {
     if (bytes.empty()) throw InvalidInput(cat(path, ": file is empty"));
     format = sniff(bytes);
   }
@@ -157,6 +178,22 @@ Mesh read_mesh(const std::string& path) {
   if (format == "off") return parse_off(bytes, path);
   if (format == "stl") return parse_stl(bytes, path);
   throw InvalidInput(cat(path, ": unrecognised file format (supported: .ply .obj .off .stl)"));
+}
+
+}  // namespace
+
+Mesh read_mesh(const std::string& path) {
+  try {
+    return read_format(path);
+  } catch (const OutOfMemory&) {
+    throw;
+  } catch (const std::bad_alloc&) {
+    // Whatever was allocated is freed by now, so the message can be built.
+    std::error_code ec;
+    const std::uintmax_t size = std::filesystem::file_size(path, ec);
+    throw OutOfMemory(ec ? cat(path, ": out of memory reading it")
+                         : cat(path, ": out of memory reading its ", size, " bytes"));
+  }
 }
 
 void write_mesh(const Mesh& mesh, const std::string& path) {

@@ -160,6 +160,13 @@ inline std::string append_fan(std::span<const std::uint32_t> poly, std::vector<T
   return {};
 }
 
+/// Past this many unused vertices, and more than half of all, a file is rejected (read_mesh).
+constexpr std::size_t kMaxUnreferencedVertices = 1'000'000;
+
+/// Throws InvalidInput naming `what` and the counts when more than kMaxUnreferencedVertices
+/// vertices, and more than half of them, are used by no triangle.
+void check_unreferenced(const Mesh& mesh, std::string_view what);
+
 /// Serialises a validated mesh as binary little-endian PLY / as OBJ; `what` names the
 /// destination in error messages.
 std::string encode_ply(const Mesh& mesh, std::string_view what);

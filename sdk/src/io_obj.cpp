@@ -124,6 +124,7 @@ Mesh parse_obj(std::string_view bytes, std::string_view what) {
       if (!problem.empty()) throw InvalidInput(cat(what, ":", line_no, ": face ", problem));
     }
   });
+  io_detail::check_unreferenced(mesh, what);
   validate(mesh, what);
   return mesh;
 }

@@ -152,6 +152,7 @@ Mesh parse_off(std::string_view bytes, std::string_view what) {
       throw InvalidInput(cat(what, ":", lines.line_no(), ": face ", f, " ", problem));
     }
   }
+  io_detail::check_unreferenced(mesh, what);
   validate(mesh, what);
   return mesh;
 }

@@ -423,6 +423,21 @@ void check_counts(const Header& h, std::size_t body_bytes, std::string_view what
   }
 }
 
+// Triangles to reserve for a face element: its count, but no more than the faces the body's
+// bytes can hold as triangles (check_counts allows a face as short as its list's count, whose
+// triangle would take 12 times its bytes). More faces than this still read, just reallocating.
+std::size_t face_reservation(const Element& e, Format format, std::size_t body_bytes) {
+  std::uint64_t per_triangle = 8;  // ascii "3 0 1 2\n"
+  if (format != Format::ascii) {
+    per_triangle = 0;
+    for (const Property& p : e.props) {
+      per_triangle += p.is_list ? size_of(p.count_type) + 3 * size_of(p.type) : size_of(p.type);
+    }
+  }
+  return static_cast<std::size_t>(
+      std::min<std::uint64_t>(e.count, body_bytes / std::max<std::uint64_t>(per_triangle, 1)));
+}
+
 // ---------------------------------------------------------------------------------------------
 // Body cursors: one value at a time, with enough context to say where a problem is.
 
@@ -769,7 +784,7 @@ Mesh parse_ply(std::string_view bytes, std::string_view what) {
       mesh.positions.resize(n);
       for (Channel& c : mesh.channels) c.values.assign(n * c.desc.width, 0.f);
     } else if (e.name == "face") {
-      mesh.triangles.reserve(static_cast<std::size_t>(e.count));
+      mesh.triangles.reserve(face_reservation(e, h.format, body.size()));
     }
   }
 
@@ -780,6 +795,7 @@ Mesh parse_ply(std::string_view bytes, std::string_view what) {
     BinaryCursor cur(body, h.format == Format::binary_be, what);
     read_body(cur, h, mesh);
   }
+  io_detail::check_unreferenced(mesh, what);
   validate(mesh, what);
   return mesh;
 }

@@ -1,6 +1,10 @@
-// The transport's socket-free parts: routing ids, the ZAP decision, CURVE key derivation.
+// The transport's socket-free parts: routing ids, the ZAP decision, CURVE key derivation, the
+// handshake monitor's counting.
 #include <gtest/gtest.h>
 
+#include <zmq.h>
+
+#include "handshake_monitor.h"
 #include "transport.h"
 
 namespace {
@@ -52,6 +56,17 @@ TEST(Transport, ZapAdmitsOnlyTheSessionsClientKey) {
     EXPECT_EQ(no.reply[1], "req-7");
     EXPECT_EQ(no.reply[2], "400");
   }
+}
+
+TEST(Transport, HandshakeEventsCountedByCause) {
+  HandshakeCounts c;
+  count_handshake_event(ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL, c);   // wrong server key, NULL
+  count_handshake_event(ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL, c);  // silent until the timeout
+  count_handshake_event(ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL, c);
+  count_handshake_event(ZMQ_EVENT_HANDSHAKE_FAILED_AUTH, c);  // ZAP counted it already
+  count_handshake_event(ZMQ_EVENT_HANDSHAKE_SUCCEEDED, c);
+  EXPECT_EQ(c.rejected, 1u);
+  EXPECT_EQ(c.abandoned, 2u);
 }
 
 }  // namespace

@@ -1,8 +1,10 @@
 // Typed exceptions inside the SDK; the C ABI maps them to status codes.
 #pragma once
 
+#include <new>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace csculpt {
 
@@ -18,6 +20,17 @@ class InvalidInput : public std::runtime_error {
 class IoError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
+};
+
+/// Memory ran out; the message says what was being done (e.g. the file being read). A
+/// std::bad_alloc, so whoever handles running out of memory still catches it.
+class OutOfMemory : public std::bad_alloc {
+ public:
+  explicit OutOfMemory(std::string message) : message_(std::move(message)) {}
+  const char* what() const noexcept override { return message_.c_str(); }
+
+ private:
+  std::string message_;
 };
 
 }  // namespace csculpt

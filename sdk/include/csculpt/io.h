@@ -13,16 +13,26 @@ namespace csculpt {
 /// (.ply .obj .off .stl, case-insensitive). Polygons are fan-triangulated.
 /// PLY vertex properties other than x,y,z become channels: `name` (width 1) or
 /// `name_r/_g/_b/_a` (width 2..4); colour `red/green/blue` becomes albedo.
-/// Throws IoError (cannot open) or InvalidInput (malformed; the message names the file,
-/// the line or element and the problem). Never returns a mesh that fails validate().
+/// Throws IoError (cannot open), InvalidInput (malformed; the message names the file,
+/// the line or element and the problem) or OutOfMemory (naming the file). Never returns a mesh that
+/// fails validate().
 ///
-/// Details: files over 2 GiB are refused; a file without a known extension is recognised by
-/// its contents. PLY: an `alpha` next to red/green/blue is dropped (albedo is RGB); channel
-/// linearisations follow default_linearisation() unless a header line
-/// `comment csculpt linearisation <channel> <identity|square|srgb>` says otherwise (the writer
-/// adds one when needed); unknown header lines are ignored like comments. STL: corners with
-/// bitwise-equal coordinates are welded in order of first occurrence, and zero-area facets
-/// (two equal corners) are dropped, as STL exporters emit them routinely.
+/// Memory: a reader allocates in proportion to the bytes the file holds (the file itself, then
+/// at most a few times its size; counts in a header are checked against the bytes that follow
+/// before anything is reserved from them). Files over 2 GiB are refused; so are devices
+/// (/dev/zero) and a pipe whose first MiB is not recognisably a mesh. A mesh with more than
+/// 1,000,000 vertices that no face uses, when they are also more than half of its vertices,
+/// is refused naming the counts: such vertices cost as much as used ones in every later step
+/// (a 2 GB sparse file would take 20 GB in a hierarchy) and no one can sculpt them, while
+/// exporters' stray vertices are few. Running out of memory throws OutOfMemory (a
+/// std::bad_alloc) naming the file.
+///
+/// Details: a file without a known extension is recognised by its contents. PLY: an `alpha` next to
+/// red/green/blue is dropped (albedo is RGB); channel linearisations follow default_linearisation()
+/// unless a header line `comment csculpt linearisation <channel> <identity|square|srgb>` says
+/// otherwise (the writer adds one when needed); unknown header lines are ignored like comments.
+/// STL: corners with bitwise-equal coordinates are welded in order of first occurrence, and
+/// zero-area facets (two equal corners) are dropped, as STL exporters emit them routinely.
 Mesh read_mesh(const std::string& path);
 
 /// Writes .ply (binary little-endian, channels as float properties) or .obj (positions and

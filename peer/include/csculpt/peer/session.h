@@ -110,6 +110,9 @@ struct SessionStats {
   std::uint64_t auth_rejected = 0;     ///< connections without the session key
   std::uint64_t snapshots_sent = 0;
   std::uint64_t fetches = 0;
+  /// Connections closed before completing a handshake: clients that connected and said nothing
+  /// for the handshake timeout (3 s), or hung up midway. Not in csc_session_stats.
+  std::uint64_t handshakes_abandoned = 0;
 };
 
 /// A brush cursor (presence): where an artist's brush is, shown live to the others.
