@@ -76,6 +76,10 @@ def script():
     while len(drawn) < 2:
         yield
     ctx = view3d()
+    km = bpy.context.window_manager.keyconfigs.addon.keymaps["Sculpt"]
+    keys = {(k.idname, k.type, k.ctrl, k.shift) for k in km.keymap_items}
+    inside.check({("csculpt.undo", 'Z', True, False), ("csculpt.redo", 'Z', True, True)} <= keys,
+                 f"Ctrl+Z / Ctrl+Shift+Z not bound in Sculpt Mode: {keys}")
     for obj in list(bpy.data.objects):
         bpy.data.objects.remove(obj)
     if role == "host":

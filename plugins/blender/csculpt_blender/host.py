@@ -53,6 +53,9 @@ def refusal(obj, vertex_count=None):
         kind = obj.type.lower().replace("_", " ")
         article = "an" if kind[0] in "aeiou" else "a"
         return f"'{obj.name}' is {article} {kind} object, not a mesh: only meshes sync."
+    if obj.mode == 'EDIT':
+        return ("Edit Mode: Blender writes the mesh only when you leave it, so remote changes "
+                "wait and your edits are sent then (if the vertex count is unchanged).")
     if getattr(obj, "use_dynamic_topology_sculpting", False):
         return ("Dynamic topology is on: it changes the vertices and strokes do not write "
                 "mesh vertices. Turn it off (Sculpt Mode header, Dyntopo) to sync.")
