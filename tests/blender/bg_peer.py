@@ -18,15 +18,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import inside  # noqa: E402
 
 role = inside.args()[0]
-st = inside.enable_addon()
-prefs = bpy.context.preferences.addons["csculpt_blender"].preferences
-prefs.artist_name = role
-prefs.sync_ms = 50
-
-
-def clear_scene():
-    for obj in list(bpy.data.objects):
-        bpy.data.objects.remove(obj)
+st = inside.enable_addon(role)
 
 
 def sphere(name):
@@ -51,7 +43,7 @@ def run_until_stop(obj):
 
 
 if role == "host":
-    clear_scene()
+    inside.clear_scene()
     obj = sphere("Shared")
     bpy.ops.object.mode_set(mode='SCULPT')
     inside.check(bpy.ops.csculpt.host() == {'FINISHED'}, "csculpt.host failed")
@@ -62,7 +54,7 @@ if role == "host":
     inside.paint(obj, lambda p: p[:, 2] > 0.6, metallic=1.0)
     run_until_stop(obj)
 elif role == "join":
-    clear_scene()
+    inside.clear_scene()
     invite = inside.wait_file("invite")
     inside.check(bpy.ops.csculpt.join(invite=invite) == {'FINISHED'}, "csculpt.join failed")
     obj = bpy.context.active_object
@@ -77,8 +69,8 @@ elif role == "join":
     inside.move(obj, lambda p: (p[:, 0] > 0.9), (0.2, 0.0, 0.0))
     run_until_stop(obj)
 elif role == "checks":
-    clear_scene()
-    prefs.join_timeout_s = 1.0
+    inside.clear_scene()
+    bpy.context.preferences.addons["csculpt_blender"].preferences.join_timeout_s = 1.0
     # A malformed invite: the operator reports an error (RuntimeError in a script), Blender runs.
     try:
         bpy.ops.csculpt.join(invite="this is not an invite")
@@ -116,7 +108,7 @@ elif role == "checks":
     except RuntimeError as e:
         inside.check("not a mesh" in str(e), f"unclear message: {e}")
     # In a session: refusals keep the session and lose nothing.
-    clear_scene()
+    inside.clear_scene()
     obj = sphere("Refusals")
     bpy.ops.csculpt.host()
     inside.check(st.active, st.status)

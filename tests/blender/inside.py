@@ -46,9 +46,20 @@ def wait_file(name, timeout=60.0):
     raise AssertionError(f"{name} did not come within {timeout} s")
 
 
-def enable_addon():
+def enable_addon(name=None):
+    """Enables the add-on (unpacked in BLENDER_USER_SCRIPTS); with `name`, as that artist
+    with a 50 ms merge interval. Returns window_manager.csculpt."""
     bpy.ops.preferences.addon_enable(module="csculpt_blender")
+    if name:
+        prefs = bpy.context.preferences.addons["csculpt_blender"].preferences
+        prefs.artist_name = name
+        prefs.sync_ms = 50
     return bpy.context.window_manager.csculpt
+
+
+def clear_scene():
+    for obj in list(bpy.data.objects):
+        bpy.data.objects.remove(obj)
 
 
 def shown(obj):

@@ -21,10 +21,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import inside  # noqa: E402
 
 role = inside.args()[0]
-st = inside.enable_addon()
-prefs = bpy.context.preferences.addons["csculpt_blender"].preferences
-prefs.artist_name = role
-prefs.sync_ms = 50
+st = inside.enable_addon(role)
 drawn = []
 
 
@@ -80,8 +77,7 @@ def script():
     keys = {(k.idname, k.type, k.ctrl, k.shift) for k in km.keymap_items}
     inside.check({("csculpt.undo", 'Z', True, False), ("csculpt.redo", 'Z', True, True)} <= keys,
                  f"Ctrl+Z / Ctrl+Shift+Z not bound in Sculpt Mode: {keys}")
-    for obj in list(bpy.data.objects):
-        bpy.data.objects.remove(obj)
+    inside.clear_scene()
     if role == "host":
         with bpy.context.temp_override(**ctx):
             bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=4, radius=1.0)

@@ -79,6 +79,7 @@ class CsculptState(bpy.types.PropertyGroup):
     dropped: IntProperty(name="Dropped messages")
     status: StringProperty(name="Status")
     errors: StringProperty(name="Errors")
+    events: StringProperty(name="Events", description="Peers joining, leaving, merging")
     refused: StringProperty(name="Refused", description="Why the object does not sync now")
     undo_depth: IntProperty(name="Undo depth")
     redo_depth: IntProperty(name="Redo depth")
@@ -117,6 +118,7 @@ def _refresh_state():
         f"{f', {p.latency_ms:.0f} ms' if p.latency_ms >= 0 else ''}" for p in peers)
     st.dropped = int(stats.messages_dropped)
     st.errors = "\n".join(_host.errors)
+    st.events = "\n".join(_host.log)
     st.refused = _host.refused or ""
     undo, redo = s.undo_depth
     st.undo_depth, st.redo_depth = undo, redo
@@ -440,14 +442,16 @@ class CSCULPT_OT_join(bpy.types.Operator):
         return {'FINISHED'}
 
 
-class CSCULPT_OT_leave(bpy.types.Operator):
-    """Leave the session; the object keeps its current shape and colours"""
-    bl_idname = "csculpt.leave"
-    bl_label = "Leave Session"
-
+class _InSession:
     @classmethod
     def poll(cls, context):
         return _host is not None
+
+
+class CSCULPT_OT_leave(_InSession, bpy.types.Operator):
+    """Leave the session; the object keeps its current shape and colours"""
+    bl_idname = "csculpt.leave"
+    bl_label = "Leave Session"
 
     def execute(self, context):
         _end()
@@ -459,14 +463,10 @@ class CSCULPT_OT_leave(bpy.types.Operator):
         return {'FINISHED'}
 
 
-class CSCULPT_OT_sync_now(bpy.types.Operator):
+class CSCULPT_OT_sync_now(_InSession, bpy.types.Operator):
     """One sync step now (scripts and background runs call this: timers do not fire there)"""
     bl_idname = "csculpt.sync_now"
     bl_label = "Sync Now"
-
-    @classmethod
-    def poll(cls, context):
-        return _host is not None
 
     def execute(self, context):
         ok = _step()
@@ -554,7 +554,7 @@ class CSCULPT_PT_panel(bpy.types.Panel):
         col.label(text=f"Peers: {st.peers}   latency: "
                   f"{'-' if st.latency_ms < 0 else f'{st.latency_ms:.0f} ms'}")
         col.label(text=f"Dropped messages: {st.dropped}")
-        for line in st.peer_lines.splitlines():
+        for line in st.peer_lines.splitlines() + st.events.splitlines()[-3:]:
             col.label(text="  " + line)
         if st.refused:
             box = layout.box()

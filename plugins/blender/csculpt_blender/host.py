@@ -432,21 +432,21 @@ class Host:
         self.attribution_version = self.session.version
         mesh.update()
 
+    _EVENT_WORDS = {
+        csculpt.EventKind.ERROR: ("errors", "Session error: {}", "unknown"),
+        csculpt.EventKind.DROPPED: ("errors", "A message was dropped: {}", "malformed or foreign"),
+        csculpt.EventKind.PEER_JOINED: ("log", "peer {peer:x} joined", ""),
+        csculpt.EventKind.PEER_LEFT: ("log", "peer {peer:x} left", ""),
+        csculpt.EventKind.PEER_EVASIVE: ("log", "peer {peer:x} is silent", ""),
+        csculpt.EventKind.MERGER_CHANGED: ("log", "peer {peer:x} merges now", ""),
+    }
+
     def poll_events(self):
         for e in self.session.events():
-            kind = e.kind
-            if kind == csculpt.EventKind.ERROR:
-                self.errors.append(f"Session error: {e.message or 'unknown'}")
-            elif kind == csculpt.EventKind.DROPPED:
-                self.errors.append(f"A message was dropped: {e.message or 'malformed or foreign'}")
-            elif kind == csculpt.EventKind.PEER_JOINED:
-                self.log.append(f"peer {e.peer:x} joined")
-            elif kind == csculpt.EventKind.PEER_LEFT:
-                self.log.append(f"peer {e.peer:x} left")
-            elif kind == csculpt.EventKind.PEER_EVASIVE:
-                self.log.append(f"peer {e.peer:x} is silent")
-            elif kind == csculpt.EventKind.MERGER_CHANGED:
-                self.log.append(f"peer {e.peer:x} merges now")
+            words = self._EVENT_WORDS.get(e.kind)
+            if words:
+                where, text, default = words
+                getattr(self, where).append(text.format(e.message or default, peer=e.peer))
         del self.errors[:-5]
         del self.log[:-5]
 
