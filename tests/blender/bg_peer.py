@@ -119,6 +119,14 @@ elif role == "checks":
         time.sleep(0.02)
     inside.check(st.strokes == 1 and st.version >= 1 and not st.refused,
                  f"stroke not taken and merged: {st.status}")
+    # The attribution view: a colour attribute switched into the cSculpt material.
+    st.show_attribution = True
+    bpy.ops.csculpt.sync_now()
+    mix = bpy.data.materials["cSculpt"].node_tree.nodes["csculpt attribution view"]
+    inside.check("csculpt_attribution" in obj.data.attributes and
+                 mix.inputs["Fac"].default_value == 1.0, "no attribution view")
+    inside.check(obj.data.color_attributes.active_color.name != "csculpt_attribution",
+                 "the attribution attribute became the one Paint paints")
     for what, on, off, words in (
             ("shape keys", lambda: obj.shape_key_add(name="Basis"),
              lambda: obj.shape_key_clear(), "shape keys"),

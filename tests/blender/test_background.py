@@ -28,6 +28,9 @@ finally:
     codes = kit.wait_all(procs.values(), logs.values(), 60)
 print("exit codes", codes, f"{time.monotonic() - t0:.1f} s")
 assert codes == [0, 0, 0], f"a Blender process failed: {codes}"
+for role, log in logs.items():
+    # Errors in callbacks (property updates, timers) are printed, not raised: none allowed.
+    assert "Traceback" not in open(log, errors="replace").read(), f"a Python error in {role}"
 
 a = np.load(work.file("final-host.npz"))
 b = np.load(work.file("final-join.npz"))

@@ -60,8 +60,8 @@ def _attribution_changed(self, context):
         mix = mat.node_tree.nodes.get("csculpt attribution view")
         if mix:
             mix.inputs["Fac"].default_value = 1.0 if self.show_attribution else 0.0
-    obj = _host.object()
-    if self.show_attribution and obj is not None and obj.type == 'MESH':
+    obj = _host.check()  # None (and the refusal in words) when the mesh cannot sync
+    if self.show_attribution and obj is not None:
         _host.write_attribution(obj.data)
 
 
