@@ -57,6 +57,13 @@ struct Session::Impl {
   // the host side's statistics
   std::uint64_t versions_applied = 0, rebases = 0, strokes_submitted = 0;
 
+  /// Refuses a host mesh of another layout (naming `call`), then makes the merge state.
+  void ready_for(const Mesh& local, const char* call) {
+    if (!same_layout(base, local))
+      throw InvalidInput(std::string(call) +
+                         ": the local mesh's vertices or channels differ from the session's");
+    ensure_merge_state();
+  }
   void ensure_merge_state() {
     if (merger) return;
     hierarchy = node->host().hierarchy();
@@ -128,9 +135,7 @@ const Mesh& Session::base() const {
 bool Session::submit(Mesh& local, std::uint32_t strokes) {
   Impl& s = *impl_;
   if (s.left) throw InvalidInput("submit: the session was left");
-  if (!same_layout(s.base, local))
-    throw InvalidInput("submit: the local mesh's vertices or channels differ from the session's");
-  s.ensure_merge_state();
+  s.ready_for(local, "submit");
   check_host_values(local, s.base, s.frame, "submit");  // before anything is sent or written
   const Diff d = capture_diff(s.base, local);
   if (d.positions.empty() && std::all_of(d.channels.begin(), d.channels.end(),
@@ -210,9 +215,7 @@ std::size_t Session::update(Mesh& local) {
   bool resend = false;
   // Refused before any version is taken: a bad value leaves them waiting for the next call.
   if (s.has_base && !local.positions.empty()) {
-    if (!same_layout(s.base, local))
-      throw InvalidInput("update: the local mesh's vertices or channels differ from the session's");
-    s.ensure_merge_state();
+    s.ready_for(local, "update");
     check_host_values(local, s.base, s.frame, "update");
   }
   for (HostItem& item : s.node->host().take_items()) s.pending.push_back(std::move(item));
@@ -236,26 +239,19 @@ std::size_t Session::update(Mesh& local) {
 void Session::record_stroke(const Mesh& local, std::span<const std::uint32_t> vertices,
                             std::span<const float> before) {
   Impl& s = *impl_;
-  if (!same_layout(s.base, local))
-    throw InvalidInput(
-        "record_stroke: the local mesh's vertices or channels differ from the session's");
-  s.ensure_merge_state();
+  s.ready_for(local, "record_stroke");
   s.undo.record(local, s.hierarchy->topology(), vertices, before);
 }
 
 bool Session::undo(Mesh& local, std::vector<std::uint32_t>& changed) {
   Impl& s = *impl_;
-  if (!same_layout(s.base, local))
-    throw InvalidInput("undo: the local mesh's vertices or channels differ from the session's");
-  s.ensure_merge_state();
+  s.ready_for(local, "undo");
   return s.undo.undo(local, *s.merger, s.frame, changed);
 }
 
 bool Session::redo(Mesh& local, std::vector<std::uint32_t>& changed) {
   Impl& s = *impl_;
-  if (!same_layout(s.base, local))
-    throw InvalidInput("redo: the local mesh's vertices or channels differ from the session's");
-  s.ensure_merge_state();
+  s.ready_for(local, "redo");
   return s.undo.redo(local, *s.merger, s.frame, changed);
 }
 
