@@ -33,6 +33,11 @@ def script():
     while len(drawn) < 2:
         yield
     win = bpy.context.window_manager.windows[0]
+    # A clean user directory shows the splash (Quick Setup): Escape closes it.
+    win.event_simulate(type='MOUSEMOVE', value='NOTHING', x=win.width // 2, y=win.height // 2)
+    win.event_simulate(type='ESC', value='PRESS')
+    win.event_simulate(type='ESC', value='RELEASE')
+    yield
     area = next(a for a in win.screen.areas if a.type == 'VIEW_3D')
     region = next(r for r in area.regions if r.type == 'WINDOW')
     ctx = dict(window=win, screen=win.screen, area=area, region=region)
@@ -53,20 +58,20 @@ def script():
     space.shading.color_type = 'VERTEX'  # the colour attribute: the session's albedo
     rv3d = space.region_3d
     rv3d.view_perspective = 'PERSP'
-    rv3d.view_rotation = Euler((math.radians(70), 0, math.radians(25))).to_quaternion()
-    rv3d.view_location = (0, 0, 0)
-    rv3d.view_distance = 4.2
+    rv3d.view_rotation = Euler((math.radians(65), 0, math.radians(20))).to_quaternion()
+    rv3d.view_location = (0.35, 0, 0)  # the sphere left of the sidebar's middle
+    rv3d.view_distance = 5.5
     for _ in range(5):
         yield
-    # The sidebar opens on its first tab; Ctrl+Shift+Tab over it cycles back from the first to
-    # the last one: the cSculpt tab (the add-on's panels are registered after Blender's).
+    # The sidebar opens on its first tab (Item): a click on the cSculpt tab, the fourth in the
+    # tab strip at the sidebar's right edge (Blender 3.4's default theme and font at 1600x900;
+    # 3.4 has no Python setter for the active tab).
     ui = next(r for r in area.regions if r.type == 'UI')
-    x, y = ui.x + ui.width // 2, ui.y + ui.height // 2
+    x, y = ui.x + ui.width - 8, ui.y + ui.height - 164
     win.event_simulate(type='MOUSEMOVE', value='NOTHING', x=x, y=y)
     yield
-    win.event_simulate(type='TAB', value='PRESS', x=x, y=y, ctrl=True, shift=True)
-    yield
-    win.event_simulate(type='TAB', value='RELEASE', x=x, y=y, ctrl=True, shift=True)
+    win.event_simulate(type='LEFTMOUSE', value='PRESS', x=x, y=y)
+    win.event_simulate(type='LEFTMOUSE', value='RELEASE', x=x, y=y)
     yield
     # Away from the sidebar: the cursor over the viewport, as an artist's would be.
     win.event_simulate(type='MOUSEMOVE', value='NOTHING', x=region.x + region.width // 3,
