@@ -61,7 +61,8 @@ def stroke(ctx, obj, points3d, brush_name, tool, colour=None):
                      "pressure": 1.0, "size": 30.0, "pen_flip": False, "x_tilt": 0.0,
                      "y_tilt": 0.0, "time": i * 0.02, "is_start": i == 0})
     with bpy.context.temp_override(**ctx):
-        result = bpy.ops.sculpt.brush_stroke(stroke=path, mode='NORMAL')
+        # An undo step, as a stroke by hand pushes (Blender's own undo is tested below).
+        result = bpy.ops.sculpt.brush_stroke('EXEC_DEFAULT', True, stroke=path, mode='NORMAL')
     inside.check(result == {'FINISHED'}, f"brush_stroke: {result}")
 
 
@@ -93,7 +94,8 @@ def script():
         obj = bpy.context.active_object
     np.savez(inside.path(f"orig-{role}.npz"), **inside.shown(obj))
     with bpy.context.temp_override(**ctx):
-        bpy.ops.object.mode_set(mode='SCULPT')
+        bpy.ops.ed.undo_push(message="before Sculpt Mode")
+        bpy.ops.object.mode_set('EXEC_DEFAULT', True, mode='SCULPT')
     rv3d = ctx["area"].spaces.active.region_3d
     rv3d.view_perspective = 'ORTHO'
     rv3d.view_rotation = Euler((math.pi / 2, 0, 0)).to_quaternion()  # front: looking along +Y
@@ -116,7 +118,29 @@ def script():
         csculpt_blender._host.set_presence(front(0.0, -0.2), 0.1, False)
     undone = False
     mid = False
+    native = False
+    name = obj.name
     while inside.read("stop") is None:
+        if not native and inside.read("native") is not None:
+            # Both peers agree here (the test waited): keep that state for the checks, then the
+            # host runs Blender's own undo back past the switch into Sculpt Mode, which reloads
+            # the file state and kills every stored reference.
+            np.savez(inside.path(f"undone-{role}.npz"), **inside.shown(obj))
+            if role == "host":
+                steps = 0
+                with bpy.context.temp_override(**ctx):
+                    # Back through the strokes until the object is in Object Mode again.
+                    while steps < 6 and bpy.data.objects[name].mode != 'OBJECT':
+                        if bpy.ops.ed.undo() != {'FINISHED'}:
+                            break
+                        steps += 1
+                print(f"blender undo: {steps} steps, now in {bpy.data.objects[name].mode} mode",
+                      flush=True)
+                inside.write("native-steps", f"{steps} {bpy.data.objects[name].mode}")
+            native = True
+            for _ in range(3):
+                yield
+            obj = bpy.data.objects[name]
         if role == "host" and not undone and inside.read("undo") is not None:
             np.savez(inside.path(f"mid-{role}.npz"), **inside.shown(obj))
             mid = True
@@ -126,7 +150,7 @@ def script():
         if role == "join" and not mid and inside.read("undo") is not None:
             np.savez(inside.path(f"mid-{role}.npz"), **inside.shown(obj))
             mid = True
-        inside.publish(role, obj, {"undone": undone, "mid": mid,
+        inside.publish(role, obj, {"undone": undone, "mid": mid, "native": native,
                                    "presence": len(csculpt_blender._presence),
                                    "undo_depth": st.undo_depth})
         yield
