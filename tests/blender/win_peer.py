@@ -157,22 +157,4 @@ def script():
     inside.dump(role, obj)
 
 
-steps = script()
-
-
-def tick():
-    try:
-        next(steps)
-    except StopIteration:
-        bpy.types.SpaceView3D.draw_handler_remove(handle, 'WINDOW')
-        bpy.ops.wm.quit_blender()
-        return None
-    except Exception:
-        import traceback
-        traceback.print_exc()
-        sys.stdout.flush()
-        os._exit(1)
-    return 0.1
-
-
-bpy.app.timers.register(tick, first_interval=0.5)
+inside.drive(script(), 0.1, handle)
