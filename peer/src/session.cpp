@@ -136,8 +136,8 @@ bool Session::submit(Mesh& local, std::uint32_t strokes) {
   Impl& s = *impl_;
   if (s.left) throw InvalidInput("submit: the session was left");
   s.ready_for(local, "submit");
-  check_host_values(local, s.base, s.frame, "submit");  // before anything is sent or written
   const Diff d = capture_diff(s.base, local);
+  check_diff_values(d, s.base, s.frame, "submit");  // the changed values: before anything is sent
   if (d.positions.empty() && std::all_of(d.channels.begin(), d.channels.end(),
                                          [](const auto& c) { return c.change.empty(); }))
     return false;
@@ -213,12 +213,13 @@ std::size_t Session::update(Mesh& local) {
   // the older version) is sent again, rebased, once the versions are applied: the host does
   // not have to notice.
   bool resend = false;
-  // Refused before any version is taken: a bad value leaves them waiting for the next call.
+  for (HostItem& item : s.node->host().take_items()) s.pending.push_back(std::move(item));
+  if (s.pending.empty()) return 0;  // hosts call this every frame: nothing to do is free
+  // Refused before any version is applied: a bad value leaves them waiting for the next call.
   if (s.has_base && !local.positions.empty()) {
     s.ready_for(local, "update");
     check_host_values(local, s.base, s.frame, "update");
   }
-  for (HostItem& item : s.node->host().take_items()) s.pending.push_back(std::move(item));
   while (!s.pending.empty()) {
     HostItem& item = s.pending.front();
     if (item.snapshot) {
