@@ -157,8 +157,9 @@ void SessionWorker::settle(int timeout_ms) {
   while (std::chrono::steady_clock::now() < deadline) {
     {
       std::lock_guard lock(mutex_);
-      if (state_ != 1 ||
-          (sent_through_ >= inbox_.handed && outbox_ && outbox_->includes >= inbox_.handed))
+      // An outbox is published after the submit of the same loop: including every command
+      // handed means they are all sent too.
+      if (state_ != 1 || (outbox_ && outbox_->includes >= inbox_.handed))
         return;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
@@ -406,7 +407,6 @@ void SessionWorker::publish() {
     outbox_taken_ = false;
   }
   if (colours) attribution_ = std::move(colours);
-  sent_through_ = done_;
   view_ = local_view_;
 }
 

@@ -143,7 +143,6 @@ class SessionWorker {
   std::chrono::steady_clock::time_point last_submit_{}, last_view_{};
   std::set<uint64_t> presence_seen_;
   SessionView local_view_;
-  std::vector<uint32_t> changed_scratch_;
 
   // shared with the UI thread, under mutex_
   mutable std::mutex mutex_;
@@ -158,7 +157,6 @@ class SessionWorker {
   bool want_attribution_ = false;
   std::shared_ptr<const std::vector<float>> attribution_;
   bool stop_ = false;
-  uint64_t sent_through_ = 0;  // commands whose result was submitted
 
   std::thread thread_;
 };

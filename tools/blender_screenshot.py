@@ -13,6 +13,10 @@ import time
 import bpy
 from mathutils import Euler
 
+# The timer driver the windowed Blender tests use (it needs nothing but bpy).
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests", "blender"))
+from drive import drive  # noqa: E402
+
 out = sys.argv[sys.argv.index("--") + 1]
 bpy.ops.preferences.addon_enable(module="csculpt_blender")
 prefs = bpy.context.preferences.addons["csculpt_blender"].preferences
@@ -88,21 +92,4 @@ def script():
         yield
 
 
-steps = script()
-
-
-def tick():
-    try:
-        next(steps)
-    except StopIteration:
-        bpy.ops.wm.quit_blender()
-        return None
-    except Exception:
-        import traceback
-        traceback.print_exc()
-        sys.stdout.flush()
-        os._exit(1)
-    return 0.1
-
-
-bpy.app.timers.register(tick, first_interval=0.5)
+drive(script(), 0.1)

@@ -48,7 +48,6 @@ class SessionUndo(unittest.TestCase):
         self.assertEqual(joiner.returncode, 0, joiner.stderr)
         host_out, host_err = host.communicate(timeout=120)
         self.assertEqual(host.returncode, 0, host_err)
-        self.joiner_out = joiner.stdout
         return Mesh(host_ply), Mesh(join_ply), host_out
 
     def test_undo_removes_my_stroke_everywhere_and_keeps_the_others(self):

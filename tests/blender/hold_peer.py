@@ -13,6 +13,7 @@ from bpy_extras import view3d_utils
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import inside  # noqa: E402
+from drive import drive  # noqa: E402
 
 st = inside.enable_addon("host")
 drawn = []
@@ -57,4 +58,4 @@ def script():
     inside.dump("host", obj)
 
 
-inside.drive(script(), 0.05, handle)
+drive(script(), 0.05, handle)

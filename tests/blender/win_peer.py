@@ -19,6 +19,7 @@ from mathutils import Euler, Vector
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import inside  # noqa: E402
+from drive import drive  # noqa: E402
 
 role = inside.args()[0]
 st = inside.enable_addon(role)
@@ -157,4 +158,4 @@ def script():
     inside.dump(role, obj)
 
 
-inside.drive(script(), 0.1, handle)
+drive(script(), 0.1, handle)
