@@ -11,17 +11,21 @@ Blender's linear colours) and the peer's own, and the PLY's arrays equal Blender
 Needs blender, csculpt-app (CSCULPT_APP), csculpt (CSCULPT_CLI) and an X display; skipped
 (77) without blender or a display."""
 
-import json
 import os
 import subprocess
 import sys
-import threading
 import time
 
 import numpy as np
 
 import blenderkit as kit
 import meshdigest
+
+# The app's replay files and `csculpt peer`'s JSON lines, as the app and session tests use them.
+sys.path.insert(0, os.path.join(kit.HERE, "..", "app"))
+sys.path.insert(0, os.path.join(kit.HERE, "..", "session"))
+from applib import Replay  # noqa: E402
+from sessionlib import Peer  # noqa: E402
 
 exe = kit.blender_or_skip()
 if not os.environ.get("DISPLAY"):
@@ -31,48 +35,6 @@ APP = os.environ.get("CSCULPT_APP", "csculpt-app")
 CLI = os.environ.get("CSCULPT_CLI", "csculpt")
 work = kit.Workdir("interop")
 t0 = time.monotonic()
-
-
-def drag(x0, y0, x1, y1, steps=16):
-    lines = [f"move {x0} {y0}", "wait 1", "press left"]
-    for i in range(1, steps + 1):
-        lines += [f"move {x0 + (x1 - x0) * i / steps:.1f} {y0 + (y1 - y0) * i / steps:.1f}",
-                  "wait 1"]
-    return lines + ["release left", "wait 2"]
-
-
-class Peer:
-    """`csculpt peer` with its JSON lines collected by a thread."""
-
-    def __init__(self, invite):
-        # The session's creator (Blender) merges for everyone while it is in.
-        self.proc = subprocess.Popen(
-            [CLI, "peer", "--join", invite, "--name", "cli", "--seed", "13",
-             "--seconds", "2", "--strokes-per-second", "5", "--linger", "40", "--sync-ms", "50"],
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        self.lines, self.lock = [], threading.Lock()
-        threading.Thread(target=self._read, daemon=True).start()
-
-    def _read(self):
-        for raw in self.proc.stdout:
-            try:
-                line = json.loads(raw)
-            except ValueError:
-                continue
-            with self.lock:
-                self.lines.append(line)
-
-    def last(self, event):
-        with self.lock:
-            found = [x for x in self.lines if x.get("event") == event]
-        return found[-1] if found else None
-
-    def quit(self):
-        try:
-            self.proc.stdin.write("quit\n")
-            self.proc.stdin.flush()
-        except (BrokenPipeError, ValueError):
-            pass
 
 
 def read_text(name):
@@ -107,13 +69,14 @@ try:
     # The app joins, waits for the session's mesh, then a Draw stroke across the sphere's
     # middle and a Paint stroke down through it. It leaves after 10 s (the peer's strokes
     # end 2 s after it joins, Blender's once both are in), settling its own first.
-    replay = ["wait 3", "wait session", "wait 5", "key d", "wait 1", *drag(540, 400, 740, 400),
-              "key b", "wait 1", *drag(640, 300, 640, 500), "key tab", "wait 2"]
-    with open(work.file("app.replay"), "w") as f:
-        f.write("\n".join(replay) + "\n")
-    peer = Peer(invite)
+    replay = (Replay().wait("session").wait(5).key("d").drag((540, 400), (740, 400))
+              .key("b").drag((640, 300), (640, 500)).write(work.path, "app.replay"))
+    # Default membership thresholds, like Blender's and the app's; the session's creator
+    # (Blender) merges for everyone while it is in.
+    peer = Peer(13, join=invite, seconds=2, rate=5, linger=40, extra=("--name", "cli"),
+                timing=("--sync-ms", "50"))
     app = subprocess.Popen([APP, "--sphere-faces", "20000", "--join", invite, "--replay",
-                            work.file("app.replay"), "--exit-after", "10", "--save", app_ply],
+                            replay, "--exit-after", "10", "--save", app_ply],
                            stdout=open(app_out, "w"), stderr=subprocess.STDOUT)
     app.wait(45)
     app_text = open(app_out, errors="replace").read()
@@ -149,7 +112,8 @@ finally:
     codes = kit.wait_all([blender], [log], 30)
     if peer:
         peer.proc.wait(10)
-        print("---- peer stderr\n" + peer.proc.stderr.read()[-2000:])
+        peer.err_reader.join(5)
+        print("---- peer stderr\n" + peer.stderr[-2000:])
 print("Blender exit", codes, f"{time.monotonic() - t0:.1f} s")
 assert codes == [0], f"Blender failed: {codes}"
 assert "Traceback" not in open(log, errors="replace").read(), "a Python error in Blender"
