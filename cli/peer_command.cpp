@@ -166,22 +166,29 @@ peer::SessionOptions session_options(const PeerCommandOptions& o) {
   so.membership = {peer::Millis{o.heartbeat_ms}, peer::Millis{o.evasive_ms},
                    peer::Millis{o.expired_ms}};
   so.name = o.name.empty() ? (o.id ? "peer-" + std::to_string(o.id) : "peer") : o.name;
+  if (!o.resume.empty() && o.name.empty()) so.name.clear();  // the journal's
+  so.journal = o.journal;
+  so.journal_max_log_versions = o.journal_max_log_versions;
   return so;
 }
 
-/// Creates the session (on a built-in sphere) or joins the one of the invite, and prints the
-/// invite line.
+/// Creates the session (on a built-in sphere), joins the one of the invite or resumes the one
+/// of the journal (`resumed` gets the local mesh with the unmerged edits), and prints the invite
+/// line.
 std::unique_ptr<peer::Session> open_session(const PeerCommandOptions& o,
-                                            const peer::SessionOptions& so) {
+                                            const peer::SessionOptions& so, Mesh& resumed) {
   std::unique_ptr<peer::Session> session =
-      o.join.empty() ? peer::Session::create(make_sphere(o.faces, true), so)
-                     : peer::Session::join(o.join, so, peer::Millis{o.join_timeout_ms});
+      !o.resume.empty() ? peer::Session::resume(o.resume, resumed, so)
+      : o.join.empty()  ? peer::Session::create(make_sphere(o.faces, true), so)
+                        : peer::Session::join(o.join, so, peer::Millis{o.join_timeout_ms});
   Line("invite")
       .str("invite", session->invite())
       .num("id", session->id())
       .str("endpoint", session->endpoint())
       .num("version", session->version())
       .num("vertices", session->base().vertex_count())
+      .raw("base_digest", hex64(peer::mesh_digest(session->base())))
+      .raw("resumed", o.resume.empty() ? "false" : "true")
       .raw("t", now_ms())
       .emit();
   return session;
@@ -380,6 +387,19 @@ CLI::App* add_peer_command(CLI::App& app, PeerCommandOptions& o) {
   p->add_flag("--ignore-stdin", o.ignore_stdin,
               "do not read stdin (run for --seconds + --linger regardless)");
   p->add_option("--out", o.out, "final mesh to write (PLY/OBJ; PLY keeps an attribution channel)");
+  CLI::Option* journal = p->add_option(
+      "--journal", o.journal,
+      "directory to journal the session to (agreed versions and unmerged edits, synced; "
+      "docs/journal.md)");
+  p->add_option("--resume", o.resume,
+                "restart this peer's session from its journal directory (same session, keys "
+                "and id; a new invite line), after a crash or kill")
+      ->excludes(journal)
+      ->excludes("--join");
+  p->add_option("--journal-max-versions", o.journal_max_log_versions,
+                "versions in the journal's log before it is compacted into a snapshot")
+      ->capture_default_str()
+      ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 40));
   return p;
 }
 
@@ -391,12 +411,14 @@ int run_peer(const PeerCommandOptions& o) {
     std::signal(SIGPIPE, SIG_IGN);  // the driver may stop reading: keep going, leave cleanly
 
     const peer::SessionOptions so = session_options(o);
-    std::unique_ptr<peer::Session> session = open_session(o, so);
+    Mesh resumed;
+    std::unique_ptr<peer::Session> session = open_session(o, so, resumed);
     ArtistOptions ao;
     ao.seed = o.seed;
     ao.strokes_per_second = o.strokes_per_second;
     ao.submit_every = so.sync;
     SimulatedArtist artist(*session, ao);
+    if (!o.resume.empty()) artist.local() = std::move(resumed);  // the unmerged edits are back
     const auto start = peer::Clock::now();
     edit_and_sync(o, *session, artist, start);
 

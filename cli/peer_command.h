@@ -25,6 +25,9 @@ struct PeerCommandOptions {
   double linger = 5;
   bool ignore_stdin = false;
   std::string out;
+  std::string journal;  ///< journal directory (create or join)
+  std::string resume;   ///< journal directory to resume from
+  std::uint64_t journal_max_log_versions = 1024;
 };
 
 CLI::App* add_peer_command(CLI::App& app, PeerCommandOptions& options);

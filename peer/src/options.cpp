@@ -62,6 +62,7 @@ void validate_options(const SessionOptions& o) {
     bad("snapshot_chunk_bytes is " + std::to_string(o.snapshot_chunk_bytes) +
         "; it must be 1024 to max_message_bytes - 4096");
   if (o.max_snapshot_bytes == 0) bad("max_snapshot_bytes is 0");
+  if (o.journal_max_log_versions == 0) bad("journal_max_log_versions is 0");
 }
 
 }  // namespace csculpt::peer

@@ -30,10 +30,13 @@ void PeerNode::start_as_creator(const Mesh& mesh) {
   build_merge_state();
   replication_.reset(0, kGenesisChain);
   joined_ = true;
+  create_journal();
+  journal_snapshot();
   event(EventKind::joined, self_);
 }
 
 void PeerNode::start_as_joiner() {
+  create_journal();
   transport_.connect(invite_.endpoint);
   joining_endpoint_ = invite_.endpoint;
 }
@@ -117,6 +120,7 @@ bool PeerNode::run_commands() {
   for (Command& c : host_.take_commands()) {
     if (c.kind == Command::Kind::leave) return false;
     own_submit_ = std::move(c);
+    journal_own();
     send_own_submit();
   }
   return true;
@@ -383,6 +387,7 @@ void PeerNode::install_snapshot(std::shared_ptr<const Snapshot> snap) {
   host_.set_frame_and_attribution(snap->frame, snap->attribution);
   if (!hierarchy_) build_merge_state();
   own_submit_.bytes.clear();
+  journal_snapshot();
   HostItem item;
   item.snapshot = true;
   item.version = replication_.version();
@@ -403,6 +408,7 @@ void PeerNode::member_joined(PeerId peer, const std::string& endpoint) {
   transport_.connect(endpoint);
   // Introduce ourselves: the newcomer learns our endpoint and that we are alive.
   transport_.send(endpoint, hello(false));
+  journal_member(peer, endpoint);
   event(EventKind::peer_joined, peer, endpoint);
 }
 
@@ -452,6 +458,7 @@ void PeerNode::apply_version(VersionRecord r) {
   // authors rebase and send again when they see this version.
   if (merger_) merger_->clear();
   add_contributions(kept);
+  journal_version(kept);  // on disk before the host sees it
   if (own_submit_.kind == Command::Kind::submit && own_submit_.base_version < version)
     own_submit_.bytes.clear();  // stale: the host rebases and submits again
   HostItem item;
@@ -597,7 +604,7 @@ void PeerNode::send_presence(Clock::time_point now) {
 }
 
 void PeerNode::merge_pending() {
-  if (!joined_ || !merger_ || merger_->empty()) return;
+  if (!joined_ || !merger_ || merger_->empty() || hold_merges(Clock::now())) return;
   // A new merger first catches up with the most advanced live peer (fetching as heartbeats
   // show the gap), so it never publishes a version number someone already holds.
   for (const auto& [peer, vc] : reported_)

@@ -19,6 +19,7 @@
 #include "csculpt/peer/membership.h"
 #include "csculpt/peer/session.h"
 #include "host_channel.h"
+#include "journal.h"
 #include "merger_role.h"
 #include "messages.h"
 #include "peer_table.h"
@@ -42,6 +43,11 @@ class PeerNode {
   void start_as_creator(const Mesh& mesh);
   /// This peer asks the invite's endpoint for a snapshot.
   void start_as_joiner();
+  /// This peer holds `snap` at the journal's snapshot version, applies the journaled versions
+  /// after it (handed to the host as versions), appends to the journal from there on, greets
+  /// the members it knew, and merges nothing until they had time to answer (the newest chain
+  /// wins, not this peer's).
+  void start_resumed(const Snapshot& snap, JournalState& state);
   void run();
   /// Tells the others this peer leaves and joins the thread (idempotent).
   void stop();
@@ -102,6 +108,15 @@ class PeerNode {
   void request_snapshot(PeerId from);
   void send_snapshot(PeerId peer);
 
+  // the journal (peer_node_journal.cpp): one call per event; a failure is reported and ends
+  // journaling, never the session
+  void create_journal();
+  void journal_snapshot();
+  void journal_version(const VersionRecord& r);
+  void journal_own();
+  void journal_member(PeerId peer, const std::string& endpoint);
+  bool hold_merges(Clock::time_point now) const { return now < resumed_merge_hold_; }
+
   // outbound
   EnvelopeHeader header() const;
   void send_to_peer(PeerId peer, const Bytes& bytes);
@@ -145,6 +160,10 @@ class PeerNode {
   bool snapshot_requested_ = false;
   PresenceSender presence_;  // when our cursor goes out
   PeerTable peer_table_;     // names, round trips, who left lately
+
+  std::optional<Journal> journal_;  // SessionOptions::journal, once opened
+  /// A resumed peer merges from then on (it waits for the others' newer versions first).
+  Clock::time_point resumed_merge_hold_{};
 
   // rate limits
   Clock::time_point next_heartbeat_{};         // the membership timer (greetings while joining)

@@ -12,6 +12,7 @@
 #include "csculpt/merge.h"
 #include "host_values.h"
 #include "invite.h"
+#include "journal.h"
 #include "merger_role.h"
 #include "peer_node.h"
 #include "presence.h"
@@ -74,6 +75,10 @@ struct Session::Impl {
                        static_cast<float>(wire.channel_tolerance));
   }
   void apply_snapshot(const HostItem& item, Mesh& local);
+  /// Resume: applies the journaled versions the node handed over, with `own` (this peer's
+  /// unmerged edit) put into `local` at its base version. True when `local` holds edits to send.
+  bool replay_journal(const std::optional<OwnEdit>& own, Mesh& local);
+  void restore_own(const OwnEdit& own, Mesh& local);
   /// Applies a merged version; true if an edit we submitted was left out of it (resend).
   bool apply_version(const HostItem& item, Mesh& local);
 };
@@ -114,6 +119,86 @@ std::unique_ptr<Session> Session::join(const std::string& invite_text,
   Mesh scratch;
   session->update(scratch);  // takes the snapshot as the base
   return session;
+}
+
+namespace {
+
+/// A resumed node: on the endpoint it had, if `options` lets the port be picked and it is free.
+std::unique_ptr<PeerNode> resumed_node(const JournalMeta& meta, SessionOptions options) {
+  if (options.bind.find('*') != std::string::npos && !meta.invite.endpoint.empty()) {
+    SessionOptions again = options;
+    again.bind = meta.invite.endpoint;
+    try {
+      return std::make_unique<PeerNode>(meta.invite, true, again);
+    } catch (const IoError&) {  // taken: a new endpoint, as the options say
+    }
+  }
+  return std::make_unique<PeerNode>(meta.invite, true, options);
+}
+
+}  // namespace
+
+std::unique_ptr<Session> Session::resume(const std::string& journal_dir, Mesh& local,
+                                         const SessionOptions& options) {
+  validate_options(options);
+  JournalState state = load_journal(journal_dir);
+  Snapshot snap;
+  try {
+    snap = decode_snapshot(state.snapshot);
+  } catch (const InvalidInput& e) {
+    throw InvalidInput("journal: " + journal_dir + "/snapshot: " + e.what());
+  }
+  auto impl = std::make_unique<Impl>();
+  impl->options = options;
+  impl->options.journal = journal_dir;
+  impl->options.id = state.meta.self;
+  if (impl->options.name.empty()) impl->options.name = state.meta.name;
+  impl->node = resumed_node(state.meta, impl->options);
+  impl->node->start_resumed(snap, state);
+  impl->base = std::move(snap.mesh);
+  impl->has_base = true;
+  impl->version = state.version;
+  local = impl->base;
+  const bool unmerged = impl->replay_journal(state.own, local);
+  impl->node->run();
+  auto session = std::unique_ptr<Session>(new Session(std::move(impl)));
+  if (unmerged) session->submit(local, 0);
+  return session;
+}
+
+void Session::Impl::restore_own(const OwnEdit& own, Mesh& local) {
+  DiffHeader header;
+  Diff d = decode_diff(own.diff, base, &header);
+  apply_diff(d, local);
+  submitted[header.sequence] = std::move(d);
+  strokes_at[header.sequence] = own.strokes;
+  unacknowledged_strokes = own.strokes;
+  next_sequence = header.sequence + 1;
+}
+
+bool Session::Impl::replay_journal(const std::optional<OwnEdit>& own, Mesh& local) {
+  ensure_merge_state();
+  // An edit based on a version before the snapshot was merged or stale when it was taken.
+  bool own_due = own && own->base_version >= version;
+  auto restore_when_due = [&] {
+    if (own_due && own->base_version == version) {
+      restore_own(*own, local);
+      own_due = false;
+    }
+  };
+  restore_when_due();
+  for (HostItem& item : node->host().take_items()) {
+    apply_version(item, local);
+    ++versions_applied;
+    restore_when_due();
+  }
+  last_submit_digest = 0;  // what was sent before the restart is sent again
+  const bool unmerged = !equals_base_plus(base, nullptr, local);
+  // Counted from the restart on: the strokes still unacknowledged are submitted again.
+  if (!unmerged) unacknowledged_strokes = 0;
+  strokes_submitted = unacknowledged_strokes;
+  node->host().update_stats([](SessionStats& st) { st.strokes_acknowledged = 0; });
+  return unmerged;
 }
 
 std::string Session::invite() const {

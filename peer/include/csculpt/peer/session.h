@@ -49,6 +49,13 @@ struct SessionOptions {
   std::size_t snapshot_chunk_bytes = std::size_t{1} << 20;
   /// Largest snapshot a joiner accepts.
   std::size_t max_snapshot_bytes = std::size_t{2} << 30;
+  /// A directory to journal the session to (docs/journal.md): the agreed versions and this
+  /// peer's unmerged edit, synced to disk before the host sees them; Session::resume restarts
+  /// from it. Empty: no journal. create and join refuse a directory that holds one already.
+  std::string journal;
+  /// The journal's log is compacted into a new snapshot past either bound.
+  std::uint64_t journal_max_log_bytes = std::uint64_t{64} << 20;
+  std::uint64_t journal_max_log_versions = 1024;
 };
 
 /// Throws InvalidInput naming the first option out of range: an interval (sync, heartbeat,
@@ -176,6 +183,15 @@ class Session {
   static std::unique_ptr<Session> join(const std::string& invite,
                                        const SessionOptions& options = {},
                                        Millis timeout = Millis{30000});
+  /// Restarts this peer's session from its journal (SessionOptions::journal) after the process
+  /// ended, however it ended: the same session id, keys, peer id and name, the agreed mesh of
+  /// the last journaled version, and `local` set to it plus this peer's unmerged edit (sent again
+  /// at once). Binds the endpoint it had if `options.bind` picks a port (else `options.bind`),
+  /// and greets the members it knew there; invite() has the endpoint. Other options come from
+  /// `options` (its journal and id are ignored). Throws IoError or InvalidInput naming the
+  /// journal file that is missing or corrupt.
+  static std::unique_ptr<Session> resume(const std::string& journal_dir, Mesh& local,
+                                         const SessionOptions& options = {});
   ~Session();  ///< leaves (tells the others) and stops the network thread
   Session(const Session&) = delete;
   Session& operator=(const Session&) = delete;
