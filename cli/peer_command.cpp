@@ -328,6 +328,11 @@ void print_summary(const peer::Session& session, const Mesh& local, std::uint32_
       .num("handshakes_abandoned", st.handshakes_abandoned)
       .num("snapshots_sent", st.snapshots_sent)
       .num("fetches", st.fetches)
+      .num("journal_writes", st.journal_writes)
+      .num("journal_snapshots", st.journal_snapshots)
+      .real("journal_ms_mean",
+            st.journal_writes ? st.journal_ms_sum / double(st.journal_writes) : 0.0)
+      .real("journal_ms_max", st.journal_ms_max)
       .num("epoch", st.epoch)
       .num("merger", st.merger)
       .num("members", st.members)

@@ -458,9 +458,13 @@ typedef struct csc_session_options {
   double position_tolerance; /**< wire tolerance, fraction of the bounding-box diagonal */
   double channel_tolerance;  /**< wire tolerance of channels, stored units */
   uint32_t join_timeout_ms;  /**< csc_session_join waits this long for the snapshot */
+  /** Since 0.4. A directory to journal the session to (docs/journal.md): the agreed versions
+   *  and this peer's unmerged edit, synced before the host sees them; csc_session_resume
+   *  restarts from it. NULL: no journal. Create and join refuse a directory holding one. */
+  const char* journal_dir;
 } csc_session_options;
 #define CSC_SESSION_OPTIONS_INIT \
-  { sizeof(csc_session_options), NULL, NULL, 0, 50, 200, 600, 1200, 1e-5, 1e-4, 30000 }
+  { sizeof(csc_session_options), NULL, NULL, 0, 50, 200, 600, 1200, 1e-5, 1e-4, 30000, NULL }
 
 /** Starts a session on `mesh` (copied; it becomes version 0). `options` may be NULL. Fails with
  *  CSC_ERROR_IO if the endpoint cannot be bound. */
@@ -471,6 +475,18 @@ CSC_API csc_status csc_session_create(csc_session** out, const csc_mesh* mesh,
  *  with CSC_ERROR_INVALID_INPUT for a malformed invite, CSC_ERROR_IO when no snapshot came. */
 CSC_API csc_status csc_session_join(csc_session** out, const char* invite,
                                     const csc_session_options* options);
+
+/** Since 0.4. Restarts this peer's session from its journal directory after the process ended,
+ *  however it ended: same session id, keys, peer id and name, the agreed mesh of the last
+ *  journaled version (csc_session_copy_base), and `*local` a new mesh holding it plus this
+ *  peer's unmerged edit (sent again at once): the host copies it into its arrays before its
+ *  next csc_session_update or csc_session_submit, and destroys it. Binds the endpoint the peer
+ *  had when options->bind picks the port (else options->bind); csc_session_invite has the
+ *  endpoint. options->id and options->journal_dir are ignored; `options` may be NULL. Fails
+ *  with CSC_ERROR_IO or CSC_ERROR_INVALID_INPUT naming the journal file that is missing or
+ *  corrupt. */
+CSC_API csc_status csc_session_resume(csc_session** out, csc_mesh** local, const char* journal_dir,
+                                      const csc_session_options* options);
 
 /** Tells the others this peer leaves and stops its network thread. Later calls other than
  *  reads and destroy fail with CSC_ERROR_INVALID_ARGUMENT. */

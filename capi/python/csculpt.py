@@ -228,7 +228,7 @@ class csc_session_options(_Sized):
                 ("id", c_uint64), ("sync_ms", c_uint32), ("heartbeat_ms", c_uint32),
                 ("evasive_ms", c_uint32), ("expired_ms", c_uint32),
                 ("position_tolerance", c_double), ("channel_tolerance", c_double),
-                ("join_timeout_ms", c_uint32)]
+                ("join_timeout_ms", c_uint32), ("journal_dir", c_char_p)]
     _defaults_ = {"sync_ms": 50, "heartbeat_ms": 200, "evasive_ms": 600, "expired_ms": 1200,
                   "position_tolerance": 1e-5, "channel_tolerance": 1e-4,
                   "join_timeout_ms": 30000}
@@ -1180,8 +1180,8 @@ class Merger(_Handle):
 
 # The options Session.create and Session.join take (csc_session_options' fields), with the
 # library's defaults (CSC_SESSION_OPTIONS_INIT); bind None = "tcp://127.0.0.1:*", name None = "",
-# id 0 = random.
-SESSION_OPTIONS: Dict[str, object] = {"bind": None, "name": None, "id": 0,
+# id 0 = random, journal_dir None = no journal (docs/journal.md).
+SESSION_OPTIONS: Dict[str, object] = {"bind": None, "name": None, "id": 0, "journal_dir": None,
                                       **csc_session_options._defaults_}
 
 

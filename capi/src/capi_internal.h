@@ -5,6 +5,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <memory>
@@ -146,6 +147,10 @@ void destroy(Handle* h, Tag tag) noexcept {
 /// may say. When a struct grows, specialise this with its old size so older hosts keep working.
 template <class T>
 constexpr std::size_t first_published_size = sizeof(T);
+/// csc_session_options grew journal_dir in 0.4.
+template <>
+constexpr std::size_t first_published_size<csc_session_options> = offsetof(csc_session_options,
+                                                                           journal_dir);
 
 void require_struct_size(std::uint32_t declared, std::size_t minimum, const char* name);
 

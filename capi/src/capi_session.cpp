@@ -29,6 +29,7 @@ csculpt::peer::SessionOptions session_options(const csc_session_options* in) {
                    csculpt::peer::Millis{o.expired_ms}};
   so.wire.position_tolerance = o.position_tolerance;
   so.wire.channel_tolerance = o.channel_tolerance;
+  if (o.journal_dir) so.journal = o.journal_dir;
   try {
     csculpt::peer::validate_options(so);
   } catch (const InvalidInput& e) {
@@ -97,6 +98,22 @@ CSC_API csc_status csc_session_join(csc_session** out, const char* invite,
     *out = new_session(
                csculpt::peer::Session::join(invite, so, csculpt::peer::Millis{o.join_timeout_ms}))
                .release();
+  });
+}
+
+CSC_API csc_status csc_session_resume(csc_session** out, csc_mesh** local, const char* journal_dir,
+                                      const csc_session_options* options) {
+  return guarded("csc_session_resume", [&] {
+    require_pointer(out, "out");
+    require_pointer(local, "local");
+    require_pointer(journal_dir, "journal_dir");
+    const csculpt::peer::SessionOptions so = session_options(options);
+    auto m = std::make_unique<csc_mesh>();
+    std::unique_ptr<csc_session> h =
+        new_session(csculpt::peer::Session::resume(journal_dir, m->mesh, so));
+    h->local = m->mesh;  // the host's arrays will hold the unmerged edit too
+    *out = h.release();
+    *local = m.release();
   });
 }
 

@@ -110,6 +110,9 @@ class PeerNode {
 
   // the journal (peer_node_journal.cpp): one call per event; a failure is reported and ends
   // journaling, never the session
+  template <class Write>
+  void journal(Write&& write);
+  void snapshot_into(Journal& j);
   void create_journal();
   void journal_snapshot();
   void journal_version(const VersionRecord& r);

@@ -1,6 +1,8 @@
 // The network thread's side of the journal (journal.h): what PeerNode writes on each event, and
 // how it starts again from a journal. Each write is synced before the node goes on, so a
 // version reaches the host (and counts as acknowledged) only once it is on disk.
+#include <algorithm>
+#include <chrono>
 #include <string>
 
 #include "csculpt/error.h"
@@ -13,19 +15,27 @@ JournalLimits limits_of(const SessionOptions& o) {
   return {o.journal_max_log_bytes, o.journal_max_log_versions};
 }
 
-/// Runs `write` on the journal, if there is one; a failure ends journaling (`failed(why)`).
-template <class Write, class Failed>
-void with_journal(std::optional<Journal>& journal, Write&& write, Failed&& failed) {
-  if (!journal) return;
-  try {
-    write(*journal);
-  } catch (const std::exception& e) {
-    journal.reset();
-    failed(std::string(e.what()) + "; journaling stopped");
-  }
-}
-
 }  // namespace
+
+/// Runs `write` on the journal, if there is one, timed into the statistics; a failure ends
+/// journaling (an error event), never the session.
+template <class Write>
+void PeerNode::journal(Write&& write) {
+  if (!journal_) return;
+  const Clock::time_point start = Clock::now();
+  try {
+    write(*journal_);
+  } catch (const std::exception& e) {
+    journal_.reset();
+    return event(EventKind::error, self_, std::string(e.what()) + "; journaling stopped");
+  }
+  const double ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+  host_.update_stats([&](SessionStats& s) {
+    ++s.journal_writes;
+    s.journal_ms_sum += ms;
+    s.journal_ms_max = std::max(s.journal_ms_max, ms);
+  });
+}
 
 void PeerNode::create_journal() {
   if (options_.journal.empty()) return;
@@ -35,39 +45,31 @@ void PeerNode::create_journal() {
       Journal::create(options_.journal, {me, self_, options_.name}, limits_of(options_)));
 }
 
+/// A snapshot of our version and a fresh log after it.
+void PeerNode::snapshot_into(Journal& j) {
+  j.reset(host_.encode_snapshot_of(base_), replication_.version(), replication_.chain());
+  host_.update_stats([](SessionStats& s) { ++s.journal_snapshots; });
+}
+
 void PeerNode::journal_snapshot() {
-  with_journal(
-      journal_,
-      [&](Journal& j) {
-        j.reset(host_.encode_snapshot_of(base_), replication_.version(), replication_.chain());
-      },
-      [&](const std::string& why) { event(EventKind::error, self_, why); });
+  journal([&](Journal& j) { snapshot_into(j); });
 }
 
 void PeerNode::journal_version(const VersionRecord& r) {
-  with_journal(
-      journal_,
-      [&](Journal& j) {
-        j.append_version(r);
-        if (j.wants_compaction())
-          j.reset(host_.encode_snapshot_of(base_), replication_.version(), replication_.chain());
-      },
-      [&](const std::string& why) { event(EventKind::error, self_, why); });
+  journal([&](Journal& j) {
+    j.append_version(r);
+    if (j.wants_compaction()) snapshot_into(j);
+  });
 }
 
 void PeerNode::journal_own() {
-  with_journal(
-      journal_,
-      [&](Journal& j) {
-        j.append_own({own_submit_.base_version, own_submit_.strokes, own_submit_.bytes});
-      },
-      [&](const std::string& why) { event(EventKind::error, self_, why); });
+  journal([&](Journal& j) {
+    j.append_own({own_submit_.base_version, own_submit_.strokes, own_submit_.bytes});
+  });
 }
 
 void PeerNode::journal_member(PeerId peer, const std::string& endpoint) {
-  with_journal(
-      journal_, [&](Journal& j) { j.append_member(peer, endpoint); },
-      [&](const std::string& why) { event(EventKind::error, self_, why); });
+  journal([&](Journal& j) { j.append_member(peer, endpoint); });
 }
 
 void PeerNode::start_resumed(const Snapshot& snap, JournalState& state) {

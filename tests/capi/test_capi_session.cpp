@@ -4,7 +4,9 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
+#include <filesystem>
 #include <functional>
 #include <string>
 #include <thread>
@@ -270,6 +272,53 @@ TEST(CapiSession, PresenceAndPeersCrossTheAbi) {
   csc_session_destroy(b);
   csc_session_destroy(a);
   csc_mesh_destroy(mesh);
+}
+
+// A host journals its session, the session ends, and csc_session_resume brings back the
+// agreed mesh and the host's unmerged edit (the options of a 0.3 host are still accepted).
+TEST(CapiSession, ResumeFromTheJournalBringsBackTheAgreedMeshAndTheUnmergedEdit) {
+  const std::string dir =
+      ::testing::TempDir() + "csculpt-capi-journal-" +
+      std::to_string(std::chrono::steady_clock::now().time_since_epoch().count());
+  csc_mesh* mesh = grid(24);
+  csc_session_options o = fast(5);
+  o.sync_ms = 3000;  // the first merge 3 s after the start: the edit stays unmerged
+  o.journal_dir = dir.c_str();
+  csc_session* a = nullptr;
+  ASSERT_EQ(csc_session_create(&a, mesh, &o), CSC_OK) << csc_last_error();
+  const std::string invite = csc_session_invite(a);
+  HostArrays ha(mesh);
+  csc_vertex_arrays va = ha.arrays();
+  for (std::size_t v = 0; v < ha.positions.size() / 3; ++v) ha.positions[3 * v + 2] += 0.05f;
+  int32_t sent = 0;
+  ASSERT_EQ(csc_session_submit(a, &va, 1, &sent), CSC_OK) << csc_last_error();
+  ASSERT_EQ(sent, 1);
+  for (int i = 0; i < 400; ++i) {  // journaled before it is sent
+    csc_session_stats st = CSC_SESSION_STATS_INIT;
+    ASSERT_EQ(csc_session_get_stats(a, &st), CSC_OK);
+    if (st.submits > 0) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  csc_session_destroy(a);
+
+  csc_session_options old = fast(0);
+  old.struct_size = offsetof(csc_session_options, journal_dir);  // a 0.3 host's
+  csc_session* r = nullptr;
+  csc_mesh* local = nullptr;
+  EXPECT_EQ(csc_session_resume(&r, &local, nullptr, &old), CSC_ERROR_INVALID_ARGUMENT);
+  const std::string empty = dir + "-none";
+  EXPECT_EQ(csc_session_resume(&r, &local, empty.c_str(), &old), CSC_ERROR_IO);
+  EXPECT_NE(std::string(csc_last_error()).find(empty), std::string::npos) << csc_last_error();
+  ASSERT_EQ(csc_session_resume(&r, &local, dir.c_str(), &old), CSC_OK) << csc_last_error();
+  EXPECT_EQ(csc_session_id(r), 5u);
+  EXPECT_EQ(std::string(csc_session_invite(r)), invite);
+  EXPECT_EQ(csc_session_version(r), 0u);
+  HostArrays back(local);
+  EXPECT_TRUE(back == ha);  // the unmerged edit is back in the host's arrays
+  csc_mesh_destroy(local);
+  csc_session_destroy(r);
+  csc_mesh_destroy(mesh);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

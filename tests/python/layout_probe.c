@@ -131,6 +131,7 @@ int main(void) {
   FIELD(csc_session_options, position_tolerance);
   FIELD(csc_session_options, channel_tolerance);
   FIELD(csc_session_options, join_timeout_ms);
+  FIELD(csc_session_options, journal_dir);
   INIT(csc_session_options, CSC_SESSION_OPTIONS_INIT, struct_size);
   INIT(csc_session_options, CSC_SESSION_OPTIONS_INIT, id);
   INIT(csc_session_options, CSC_SESSION_OPTIONS_INIT, sync_ms);

@@ -120,6 +120,12 @@ struct SessionStats {
   /// Connections closed before completing a handshake: clients that connected and said nothing
   /// for the handshake timeout (3 s), or hung up midway. Not in csc_session_stats.
   std::uint64_t handshakes_abandoned = 0;
+  // the journal (SessionOptions::journal): writes synced, and the time they took on the network
+  // thread (an agreed version, a submit, a snapshot). Not in csc_session_stats.
+  std::uint64_t journal_writes = 0;
+  std::uint64_t journal_snapshots = 0;
+  double journal_ms_sum = 0;
+  double journal_ms_max = 0;
 };
 
 /// A brush cursor (presence): where an artist's brush is, shown live to the others.
