@@ -389,8 +389,9 @@ Journal Journal::create(const std::string& dir, const JournalMeta& meta, Journal
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) throw IoError("journal: cannot create " + dir + ": " + ec.message());
-  if (fs::exists(file_in(dir, "session")))
-    throw InvalidInput("journal: " + file_in(dir, "session") +
+  // A journal without a snapshot (a join that never got the mesh) holds nothing to resume.
+  if (fs::exists(file_in(dir, "snapshot")))
+    throw InvalidInput("journal: " + file_in(dir, "snapshot") +
                        " exists: this directory holds a journal already (resume it)");
   Journal j(dir, limits);
   const std::string path = file_in(dir, "session");

@@ -60,7 +60,7 @@ struct JournalLimits {
 class Journal {
  public:
   /// A new journal in `dir` (created if missing): writes `session`. Throws IoError, and
-  /// InvalidInput if `dir` already holds a journal (resume it instead).
+  /// InvalidInput if `dir` already holds a journal with a snapshot (resume it instead).
   static Journal create(const std::string& dir, const JournalMeta& meta, JournalLimits limits);
   /// Appends to the journal `state` was loaded from: the log is cut after its valid records and
   /// `session` rewritten with `meta` (a new endpoint).

@@ -272,6 +272,8 @@ TEST(Journal, AMissingEmptyOrGarbageDirectoryIsRefusedNamingTheFile) {
     Journal j = Journal::create(dir.path(), sample_meta(), {});  // no snapshot yet
   }
   EXPECT_NE(load_error(dir.path()).find(dir.file("snapshot")), std::string::npos);
+  // Nothing to resume without a snapshot: a new journal may start there; with one, not.
+  Journal::create(dir.path(), sample_meta(), {}).reset(sample_snapshot(), 0, kGenesisChain);
   EXPECT_THROW(Journal::create(dir.path(), sample_meta(), {}), InvalidInput);  // resume it
   fill((fs::path(dir.path()) / "second").string(), 1);
   const std::string second = (fs::path(dir.path()) / "second").string();
