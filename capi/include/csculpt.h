@@ -56,11 +56,11 @@ extern "C" {
 /* ---- Version ------------------------------------------------------------------------------ */
 
 #define CSC_VERSION_MAJOR 0
-#define CSC_VERSION_MINOR 3
+#define CSC_VERSION_MINOR 4
 #define CSC_VERSION_PATCH 0
 /** MAJOR * 10000 + MINOR * 100 + PATCH, as csc_version() returns it. */
 #define CSC_VERSION_NUMBER (CSC_VERSION_MAJOR * 10000 + CSC_VERSION_MINOR * 100 + CSC_VERSION_PATCH)
-#define CSC_VERSION_STRING "0.3.0"
+#define CSC_VERSION_STRING "0.4.0"
 
 /** The version of the library actually loaded (compare with CSC_VERSION_NUMBER: a host built
  *  against MAJOR.MINOR runs with any library of the same MAJOR and a MINOR at least as high).

@@ -62,7 +62,7 @@ __all__ = [
 
 # The header version this module was written against: it runs with a library of the same
 # major and a minor at least this high (the ABI only grows within a major).
-EXPECTED_VERSION = (0, 3)
+EXPECTED_VERSION = (0, 4)
 
 # ---- Enums (32-bit in C) -------------------------------------------------------------------
 
@@ -378,6 +378,8 @@ PROTOTYPES = {
     "csc_session_create": (_STATUS, [POINTER(_SessionP), _MeshP,
                                      POINTER(csc_session_options)]),
     "csc_session_join": (_STATUS, [POINTER(_SessionP), c_char_p, POINTER(csc_session_options)]),
+    "csc_session_resume": (_STATUS, [POINTER(_SessionP), POINTER(_MeshP), c_char_p,
+                                     POINTER(csc_session_options)]),
     "csc_session_leave": (_STATUS, [_SessionP]),
     "csc_session_destroy": (None, [_SessionP]),
     "csc_session_invite": (c_char_p, [_SessionP]),
@@ -1295,7 +1297,7 @@ class Session(_Handle):
     _kind = "session"
 
     def __init__(self):
-        raise TypeError("use Session.create or Session.join")
+        raise TypeError("use Session.create, Session.join or Session.resume")
 
     @classmethod
     def _adopt(cls, ptr) -> "Session":
@@ -1330,6 +1332,20 @@ class Session(_Handle):
         out = _SessionP()
         _lib.csc_session_join(ctypes.byref(out), invite.encode("utf-8"), ctypes.byref(o))
         return cls._adopt(out)
+
+    @classmethod
+    def resume(cls, journal_dir: str, **options) -> Tuple["Session", Mesh]:
+        """Restarts this peer's session from its journal (docs/journal.md): the session and the
+        local mesh to fill the host's arrays from (the agreed mesh plus the unmerged edit,
+        already sent again). Raises IoError or InvalidInput naming a missing or corrupt file."""
+        if not isinstance(journal_dir, str):
+            raise InvalidArgument("csculpt: journal_dir must be a str")
+        o = _session_options(options)
+        out, local = _SessionP(), _MeshP()
+        _lib.csc_session_resume(ctypes.byref(out), ctypes.byref(local),
+                                journal_dir.encode("utf-8"), ctypes.byref(o))
+        mesh = Mesh._adopt(local)
+        return cls._adopt(out), mesh
 
     @property
     def invite(self) -> str:

@@ -3,6 +3,8 @@ own numpy arrays in place, converging bit for bit; events, statistics, attributi
 and the errors raised for bad invites, options and host arrays."""
 
 import gc
+import os
+import tempfile
 import time
 import unittest
 import weakref
@@ -173,6 +175,28 @@ class TwoPeers(unittest.TestCase):
 
         wait_for(a_saw_b_leave, "a PEER_LEFT event for b on a")
         wait_for(lambda: a.stats.members == 1, "a to count 1 member")
+
+
+class Journal(unittest.TestCase):
+
+    def test_resume_gives_back_the_session_and_the_unmerged_edit(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            journal = os.path.join(tmp, "journal")
+            slow = dict(FAST, sync_ms=3000)  # the first merge 3 s after the start
+            with material_sphere() as mesh, \
+                    csculpt.Session.create(mesh, id=4, journal_dir=journal, **slow) as a:
+                invite = a.invite
+                pa, ca = host_arrays(mesh)
+                pa[:] = meshes.grab(pa, (0, 0, 1), 0.6, (0, 0, 0.3))
+                self.assertTrue(a.submit(pa, ca, strokes=1))
+                wait_for(lambda: a.stats.submits > 0, "the submit (journaled first)")
+            with self.assertRaises(csculpt.IoError):
+                csculpt.Session.resume(os.path.join(tmp, "nothing"))
+            b, local = csculpt.Session.resume(journal, **slow)
+            with b, local:
+                self.assertEqual((b.id, b.version, b.invite), (4, 0, invite))
+                pb, cb = host_arrays(local)
+                self.assertTrue(same_bits(pa, ca, pb, cb), "the unmerged edit is not back")
 
 
 class Undo(unittest.TestCase):
