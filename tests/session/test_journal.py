@@ -55,9 +55,11 @@ class Journal(unittest.TestCase):
                              for i in IDS[1:]]
         for p in peers:
             p.wait_for(lambda p=p: p.state() and p.state()["members"] == 3, 30, "3 members")
-        # Several compactions in, every peer has strokes acknowledged and more in flight.
+        # Several compactions in, every peer has strokes acknowledged, and some more in flight.
         wait_all(lambda: all(p.state()["acknowledged"] >= 5 and p.state()["version"] >= 40
-                             for p in peers), 60, "acknowledged strokes", peers)
+                             for p in peers) and
+                 any(p.state()["unacknowledged"] > 0 for p in peers),
+                 60, "acknowledged strokes and some in flight", peers)
         return peers
 
     def test_sigkill_of_every_peer_loses_no_acknowledged_edit(self):
