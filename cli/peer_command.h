@@ -24,6 +24,7 @@ struct PeerCommandOptions {
   std::uint64_t seed = 1;
   double linger = 5;
   bool ignore_stdin = false;
+  bool markers = false;  ///< a marker with each stroke (markers.h)
   std::string out;
 };
 

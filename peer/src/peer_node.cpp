@@ -13,7 +13,8 @@ PeerNode::PeerNode(const Invite& invite, bool creator, const SessionOptions& opt
     : options_(options),
       invite_(invite),
       self_(options.id ? options.id : random_u64() | 1),
-      transport_(invite, self_, options.bind, options.max_message_bytes),
+      transport_(invite, self_, options.bind, options.max_message_bytes,
+                 options.membership.heartbeat, options.membership.evasive),
       membership_(self_, transport_.endpoint(), options.membership),
       election_(self_) {
   if (creator) invite_.endpoint = transport_.endpoint();
