@@ -344,6 +344,8 @@ void print_summary(const peer::Session& session, const Mesh& local, std::uint32_
       .num("submit_bytes", st.submit_bytes)
       .num("versions_applied", st.versions_applied)
       .num("rebases", st.rebases)
+      .num("branch_rebases", st.branch_rebases)
+      .num("branch_versions_dropped", st.branch_versions_dropped)
       .num("merges", st.merges)
       .num("merged_strokes", st.merged_strokes)
       .num("conflicting_strokes", st.conflicting_strokes)

@@ -376,8 +376,10 @@ void PeerNode::on_snapshot_chunk(const fb::SnapshotChunk& c) {
 /// The assembled snapshot becomes our version: the joiner's first, or a diverged peer's way
 /// back to the merger's history.
 void PeerNode::install_snapshot(std::shared_ptr<const Snapshot> snap) {
+  const std::optional<std::uint64_t> fork =
+      joined_ ? replication_.fork_point(snap->chains) : std::nullopt;
   base_ = snap->mesh;
-  replication_.reset(snapshot_.version(), snapshot_.chain());
+  replication_.reset(snapshot_.version(), snapshot_.chain(), snap->chains);
   snapshot_requested_ = false;
   if (merger_) merger_->clear();
   frame_ = snap->frame;
@@ -388,6 +390,7 @@ void PeerNode::install_snapshot(std::shared_ptr<const Snapshot> snap) {
   item.snapshot = true;
   item.version = replication_.version();
   item.snap = std::move(snap);
+  item.fork = fork;
   host_.push_item(std::move(item), [](SessionStats&) {});
   if (!joined_) {
     joined_ = true;
@@ -500,7 +503,7 @@ void PeerNode::request_snapshot(PeerId from) {
 
 void PeerNode::send_snapshot(PeerId peer) {
   if (!joined_) return;
-  const Bytes bytes = host_.encode_snapshot_of(base_);
+  const Bytes bytes = host_.encode_snapshot_of(base_, replication_.recent_chains(kChainsSent));
   host_.update_stats([](SessionStats& s) { ++s.snapshots_sent; });
   const std::size_t chunk = std::max<std::size_t>(1024, options_.snapshot_chunk_bytes);
   for (std::size_t offset = 0; offset < bytes.size(); offset += chunk) {

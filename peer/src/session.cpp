@@ -16,6 +16,7 @@
 #include "peer_node.h"
 #include "presence.h"
 #include "rebase.h"
+#include "revert_log.h"
 #include "undo_stack.h"
 
 namespace csculpt::peer {
@@ -52,10 +53,13 @@ struct Session::Impl {
   std::uint32_t unacknowledged_strokes = 0;
   std::map<std::uint64_t, std::uint32_t> strokes_at;
   UndoStack undo;
+  /// The values each applied version overwrote: how base steps back to a fork point.
+  RevertLog reverts;
   /// Versions and snapshots taken from the network thread and not yet applied.
   std::deque<HostItem> pending;
   // the host side's statistics
-  std::uint64_t versions_applied = 0, rebases = 0, strokes_submitted = 0;
+  std::uint64_t versions_applied = 0, rebases = 0, strokes_submitted = 0, branch_rebases = 0,
+                branch_versions_dropped = 0;
 
   /// Refuses a host mesh of another layout (naming `call`), then makes the merge state.
   void ready_for(const Mesh& local, const char* call) {
@@ -74,6 +78,9 @@ struct Session::Impl {
                        static_cast<float>(wire.channel_tolerance));
   }
   void apply_snapshot(const HostItem& item, Mesh& local);
+  /// The mesh `item`'s snapshot branched from: our base stepped back to the fork point when
+  /// we held another branch, so that branch's versions since are carried over, not dropped.
+  Mesh fork_base(const HostItem& item);
   /// Applies a merged version; true if an edit we submitted was left out of it (resend).
   bool apply_version(const HostItem& item, Mesh& local);
 };
@@ -167,12 +174,26 @@ bool Session::submit(Mesh& local, std::uint32_t strokes) {
   return true;
 }
 
+Mesh Session::Impl::fork_base(const HostItem& item) {
+  Mesh from = base;
+  // No common version known: the whole kept history is carried (what both branches share
+  // merges as one intent, SameChange::once).
+  const std::uint64_t fork = item.fork.value_or(0);
+  if (fork >= version) return from;  // our branch is the snapshot's: nothing of ours is lost
+  const std::uint64_t reached = reverts.revert(from, version, fork);
+  ++branch_rebases;
+  if (item.fork) branch_versions_dropped += reached - fork;
+  return from;
+}
+
 void Session::Impl::apply_snapshot(const HostItem& item, Mesh& local) {
   const Mesh& snap = item.snap->mesh;
   if (has_base) {
-    // Carry the local edits (relative to the old base) over to the snapshot.
+    // Carry the local edits, and our branch's versions since the fork, over to the snapshot.
     ensure_merge_state();
-    if (rebase_onto_snapshot(base, snap, local, *merger, frame)) ++rebases;
+    Mesh from = fork_base(item);
+    if (rebase_onto_snapshot(from, snap, local, *merger, frame)) ++rebases;
+    base = std::move(from);  // the snapshot now
   } else {
     local = snap;
     base = snap;
@@ -181,6 +202,7 @@ void Session::Impl::apply_snapshot(const HostItem& item, Mesh& local) {
   version = item.version;
   submitted.clear();
   last_submit_digest = 0;
+  reverts.clear();  // the versions it stepped back were another branch's
   ensure_merge_state();
 }
 
@@ -197,6 +219,7 @@ bool Session::Impl::apply_version(const HostItem& item, Mesh& local) {
         if (auto st = strokes_at.find(m.sequence); st != strokes_at.end())
           unacknowledged_strokes -= std::min(unacknowledged_strokes, st->second);
       }
+  reverts.record(item.version, item.merged, base);
   if (rebase_onto_version(base, ours, item.merged, local, *merger, frame)) ++rebases;
   version = item.version;
   const bool resend = !submitted.empty() && submitted.rbegin()->first != merged_sequence;
@@ -223,7 +246,8 @@ std::size_t Session::update(Mesh& local) {
   while (!s.pending.empty()) {
     HostItem& item = s.pending.front();
     if (item.snapshot) {
-      resend |= !s.submitted.empty();
+      // Edits submitted but not in the snapshot, or a lost branch's carried over: sent again.
+      resend |= !s.submitted.empty() || (s.has_base && item.fork.value_or(0) < s.version);
       s.apply_snapshot(item, local);
       ++applied;
     } else if (item.version == s.version + 1) {  // always: the node hands them in order
@@ -272,6 +296,8 @@ SessionStats Session::stats() const {
   SessionStats st = impl_->node->host().stats();
   st.versions_applied = impl_->versions_applied;
   st.rebases = impl_->rebases;
+  st.branch_rebases = impl_->branch_rebases;
+  st.branch_versions_dropped = impl_->branch_versions_dropped;
   st.strokes_submitted = impl_->strokes_submitted;
   return st;
 }
