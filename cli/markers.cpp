@@ -19,8 +19,9 @@ void add_marker_channel(Mesh& mesh) {
   if (marker_channel(mesh) < 0) mesh.add_channel({kChannel, 1, Linearisation::identity, 0.f, 1.f});
 }
 
-MarkerPainter::MarkerPainter(std::uint64_t peer, const Mesh& mesh)
-    : slot_(static_cast<std::uint32_t>(peer % kMarkerSlots)) {
+MarkerPainter::MarkerPainter(std::uint32_t slot, std::uint32_t first, std::uint32_t limit,
+                             const Mesh& mesh)
+    : slot_(slot % kMarkerSlots), first_(first), limit_(limit) {
   if (marker_channel(mesh) < 0)
     throw InvalidInput("--markers: the session's mesh has no marker channel (its creator must "
                        "run with --markers too)");
@@ -32,8 +33,9 @@ bool MarkerPainter::marked(const Mesh& mesh, std::uint32_t vertex) {
 }
 
 std::int64_t MarkerPainter::paint(Mesh& local) {
-  const std::uint64_t v = std::uint64_t{slot_} + std::uint64_t{kMarkerSlots} * made_.size();
-  if (v >= local.vertex_count()) return -1;
+  const std::uint64_t v =
+      std::uint64_t{slot_} + std::uint64_t{kMarkerSlots} * (first_ + made_.size());
+  if (made_.size() >= limit_ || v >= local.vertex_count()) return -1;
   local.channels[marker_channel(local)].values[v] = 1.f;
   made_.push_back(static_cast<std::uint32_t>(v));
   waiting_.push_back(static_cast<std::uint32_t>(v));

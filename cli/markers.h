@@ -19,10 +19,13 @@ void add_marker_channel(Mesh& mesh);
 
 class MarkerPainter {
  public:
-  /// Throws InvalidInput when `mesh` has no marker channel (the session was not made with one).
-  MarkerPainter(std::uint64_t peer, const Mesh& mesh);
+  /// Marks the vertices `slot` + kMarkerSlots * k for k = first, first + 1, ... (a restarted
+  /// peer takes another `first` or `slot`, so that its markers are new ones). Throws
+  /// InvalidInput when `mesh` has no marker channel (the session was not made with one).
+  MarkerPainter(std::uint32_t slot, std::uint32_t first, std::uint32_t limit, const Mesh& mesh);
 
-  /// Marks the next vertex of ours in `local`; the vertex, or -1 once every one is marked.
+  /// Marks the next vertex of ours in `local`; the vertex, or -1 once `limit` are made or the
+  /// mesh has no more.
   std::int64_t paint(Mesh& local);
   /// Markers made that `base` (an agreed version) now holds for the first time: acknowledged.
   std::vector<std::uint32_t> newly_acknowledged(const Mesh& base);
@@ -37,7 +40,7 @@ class MarkerPainter {
  private:
   static bool marked(const Mesh& mesh, std::uint32_t vertex);
 
-  std::uint32_t slot_;
+  std::uint32_t slot_, first_, limit_;
   std::vector<std::uint32_t> made_;          // in order
   std::vector<std::uint32_t> acknowledged_;  // seen in an agreed version
   std::vector<std::uint32_t> waiting_;       // made, not yet seen

@@ -106,9 +106,11 @@ class Line {
   std::string text_;
 };
 
-/// Reads stdin without blocking: a line `quit` or end of file asks the peer to finish.
+/// Reads stdin without blocking: a line `quit` or end of file asks the peer to finish, a line
+/// `stop-editing` to stop making strokes and keep syncing.
 class StdinWatch {
  public:
+  bool editing_stopped() const { return stop_editing_; }
   bool quit_requested() {
     if (eof_) return true;
     pollfd p{0, POLLIN, 0};
@@ -125,6 +127,7 @@ class StdinWatch {
         pending_.erase(0, nl + 1);
         while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
         if (line == "quit") quit_ = true;
+        if (line == "stop-editing") stop_editing_ = true;
       }
       if (quit_) return true;
     }
@@ -133,7 +136,7 @@ class StdinWatch {
 
  private:
   std::string pending_;
-  bool eof_ = false, quit_ = false;
+  bool eof_ = false, quit_ = false, stop_editing_ = false;
 };
 
 std::string_view kind_name(peer::EventKind k) {
@@ -294,7 +297,7 @@ void edit_and_sync(const PeerCommandOptions& o, peer::Session& session, Simulate
   while (true) {
     const auto now = peer::Clock::now();
     const bool quit = g_signalled || (!o.ignore_stdin && input.quit_requested());
-    const bool editing = !quit && now < edit_end;
+    const bool editing = !quit && !input.editing_stopped() && now < edit_end;
     artist.step(now, editing);
     if (markers) mark(session, artist, *markers);
     for (const peer::Event& e : session.poll_events()) print_event(e, self, artist);
@@ -413,7 +416,7 @@ CLI::App* add_peer_command(CLI::App& app, PeerCommandOptions& o) {
   p->add_option("--seed", o.seed, "stroke script seed")->capture_default_str();
   p->add_option("--linger", o.linger,
                 "seconds to keep syncing after editing stops; a line 'quit' or end of file on "
-                "stdin ends the run earlier")
+                "stdin ends the run earlier, a line 'stop-editing' stops the strokes")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1e6));
   p->add_flag("--ignore-stdin", o.ignore_stdin,
@@ -421,6 +424,12 @@ CLI::App* add_peer_command(CLI::App& app, PeerCommandOptions& o) {
   p->add_flag("--markers", o.markers,
               "with each stroke, a marker (one vertex of a 'marker' channel set to 1) whose "
               "presence the summary checks in the agreed mesh; the creator adds the channel");
+  p->add_option("--marker-slot", o.marker_slot,
+                "which markable vertices are this peer's (0-15; default: its id mod 16)")
+      ->check(CLI::Range(0, 15));
+  p->add_option("--marker-first", o.marker_first,
+                "index of the first marker (a restarted peer makes new markers from here)");
+  p->add_option("--marker-limit", o.marker_limit, "markers to make at most");
   p->add_option("--out", o.out, "final mesh to write (PLY/OBJ; PLY keeps an attribution channel)");
   return p;
 }
@@ -440,7 +449,10 @@ int run_peer(const PeerCommandOptions& o) {
     ao.submit_every = so.sync;
     SimulatedArtist artist(*session, ao);
     std::optional<MarkerPainter> markers;
-    if (o.markers) markers.emplace(session->id(), session->base());
+    if (o.markers)
+      markers.emplace(static_cast<std::uint32_t>(o.marker_slot >= 0 ? std::uint64_t(o.marker_slot)
+                                                                     : session->id() % kMarkerSlots),
+                      o.marker_first, o.marker_limit, session->base());
     const auto start = peer::Clock::now();
     edit_and_sync(o, *session, artist, markers ? &*markers : nullptr, start);
 
