@@ -60,6 +60,10 @@ struct Session::Impl {
   // the host side's statistics
   std::uint64_t versions_applied = 0, rebases = 0, strokes_submitted = 0, branch_rebases = 0,
                 branch_versions_dropped = 0;
+  /// Counted here, as the host applies a version holding them, never from what the network
+  /// thread saw: a version of a branch that lost is never applied, and what it held is sent
+  /// again and counted once, when the surviving chain has it.
+  std::uint64_t strokes_acknowledged = 0;
 
   /// Refuses a host mesh of another layout (naming `call`), then makes the merge state.
   void ready_for(const Mesh& local, const char* call) {
@@ -201,6 +205,7 @@ void Session::Impl::apply_snapshot(const HostItem& item, Mesh& local) {
   has_base = true;
   version = item.version;
   submitted.clear();
+  strokes_at.clear();  // those submits are not in the snapshot: their strokes go out again
   last_submit_digest = 0;
   reverts.clear();  // the versions it stepped back were another branch's
   ensure_merge_state();
@@ -216,8 +221,11 @@ bool Session::Impl::apply_version(const HostItem& item, Mesh& local) {
       if (auto it = submitted.find(m.sequence); it != submitted.end()) {
         ours = &it->second;
         merged_sequence = m.sequence;
-        if (auto st = strokes_at.find(m.sequence); st != strokes_at.end())
-          unacknowledged_strokes -= std::min(unacknowledged_strokes, st->second);
+        if (auto st = strokes_at.find(m.sequence); st != strokes_at.end()) {
+          const std::uint32_t acknowledged = std::min(unacknowledged_strokes, st->second);
+          unacknowledged_strokes -= acknowledged;
+          strokes_acknowledged += acknowledged;
+        }
       }
   reverts.record(item.version, item.merged, base);
   if (rebase_onto_version(base, ours, item.merged, local, *merger, frame)) ++rebases;
@@ -299,6 +307,7 @@ SessionStats Session::stats() const {
   st.branch_rebases = impl_->branch_rebases;
   st.branch_versions_dropped = impl_->branch_versions_dropped;
   st.strokes_submitted = impl_->strokes_submitted;
+  st.strokes_acknowledged = impl_->strokes_acknowledged;
   return st;
 }
 

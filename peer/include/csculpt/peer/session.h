@@ -88,7 +88,7 @@ struct SessionStats {
   std::uint64_t submits = 0;
   std::uint64_t submit_bytes = 0;
   std::uint64_t strokes_submitted = 0;     ///< strokes the host reported
-  std::uint64_t strokes_acknowledged = 0;  ///< of those, seen inside a merged version
+  std::uint64_t strokes_acknowledged = 0;  ///< of those, in a version update() applied
   std::uint64_t versions_applied = 0;      ///< by update()
   std::uint64_t rebases = 0;               ///< updates that had local edits to carry over
   /// Switches to another branch of the history (after a partition healed, the one this peer
