@@ -7,11 +7,13 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <thread>
 
 #include "artist.h"
+#include "markers.h"
 #include "csculpt/error.h"
 #include "csculpt/io.h"
 #include "csculpt/peer/session.h"
@@ -50,6 +52,15 @@ std::string json_string(std::string_view s) {
     }
   }
   return out + "\"";
+}
+
+std::string json_list(const std::vector<std::uint32_t>& values) {
+  std::string out = "[";
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if (i) out += ",";
+    out += std::to_string(values[i]);
+  }
+  return out + "]";
 }
 
 std::string hex64(std::uint64_t v) {
@@ -95,9 +106,11 @@ class Line {
   std::string text_;
 };
 
-/// Reads stdin without blocking: a line `quit` or end of file asks the peer to finish.
+/// Reads stdin without blocking: a line `quit` or end of file asks the peer to finish, a line
+/// `stop-editing` to stop making strokes and keep syncing.
 class StdinWatch {
  public:
+  bool editing_stopped() const { return stop_editing_; }
   bool quit_requested() {
     if (eof_) return true;
     pollfd p{0, POLLIN, 0};
@@ -114,6 +127,7 @@ class StdinWatch {
         pending_.erase(0, nl + 1);
         while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
         if (line == "quit") quit_ = true;
+        if (line == "stop-editing") stop_editing_ = true;
       }
       if (quit_) return true;
     }
@@ -122,7 +136,7 @@ class StdinWatch {
 
  private:
   std::string pending_;
-  bool eof_ = false, quit_ = false;
+  bool eof_ = false, quit_ = false, stop_editing_ = false;
 };
 
 std::string_view kind_name(peer::EventKind k) {
@@ -177,10 +191,16 @@ peer::SessionOptions session_options(const PeerCommandOptions& o) {
 /// line.
 std::unique_ptr<peer::Session> open_session(const PeerCommandOptions& o,
                                             const peer::SessionOptions& so, Mesh& resumed) {
-  std::unique_ptr<peer::Session> session =
-      !o.resume.empty() ? peer::Session::resume(o.resume, resumed, so)
-      : o.join.empty()  ? peer::Session::create(make_sphere(o.faces, true), so)
-                        : peer::Session::join(o.join, so, peer::Millis{o.join_timeout_ms});
+  std::unique_ptr<peer::Session> session;
+  if (!o.resume.empty()) {
+    session = peer::Session::resume(o.resume, resumed, so);
+  } else if (o.join.empty()) {
+    Mesh sphere = make_sphere(o.faces, true);
+    if (o.markers) add_marker_channel(sphere);
+    session = peer::Session::create(sphere, so);
+  } else {
+    session = peer::Session::join(o.join, so, peer::Millis{o.join_timeout_ms});
+  }
   Line("invite")
       .str("invite", session->invite())
       .num("id", session->id())
@@ -260,8 +280,20 @@ void print_state(const State& s, peer::PeerId self) {
 
 /// The artist edits until --seconds, syncing goes on until --linger more (or a signal, or
 /// `quit` on stdin); every event and every change of state is printed.
+/// A marker with each new stroke; the markers an agreed version shows for the first time.
+void mark(peer::Session& session, SimulatedArtist& artist, MarkerPainter& markers) {
+  while (markers.made() < artist.strokes()) {
+    const std::int64_t v = markers.paint(artist.local());
+    if (v < 0) break;
+    Line("marker").num("id", session.id()).num("vertex", static_cast<std::uint64_t>(v)).emit();
+  }
+  const std::vector<std::uint32_t> seen = markers.newly_acknowledged(session.base());
+  if (!seen.empty())
+    Line("marker_acked").num("id", session.id()).raw("vertices", json_list(seen)).emit();
+}
+
 void edit_and_sync(const PeerCommandOptions& o, peer::Session& session, SimulatedArtist& artist,
-                   peer::Clock::time_point start) {
+                   MarkerPainter* markers, peer::Clock::time_point start) {
   StdinWatch input;
   const auto edit_end = start + std::chrono::duration_cast<peer::Clock::duration>(
                                     std::chrono::duration<double>(o.seconds));
@@ -273,8 +305,9 @@ void edit_and_sync(const PeerCommandOptions& o, peer::Session& session, Simulate
   while (true) {
     const auto now = peer::Clock::now();
     const bool quit = g_signalled || (!o.ignore_stdin && input.quit_requested());
-    const bool editing = !quit && now < edit_end;
+    const bool editing = !quit && !input.editing_stopped() && now < edit_end;
     artist.step(now, editing);
+    if (markers) mark(session, artist, *markers);
     for (const peer::Event& e : session.poll_events()) print_event(e, self, artist);
     const State s = read_state(session, artist, editing);
     if (first_state || !(s == last)) {
@@ -297,10 +330,18 @@ void write_final_mesh(const peer::Session& session, const Mesh& local, const std
   write_mesh(out, path);
 }
 
-/// `lost`: the artist's strokes not seen inside a merged version.
+/// `lost`: the artist's strokes not seen inside a merged version. With markers, also what the
+/// agreed mesh holds: our acknowledged markers it lacks, and everyone's it has.
 void print_summary(const peer::Session& session, const Mesh& local, std::uint32_t strokes,
-                   std::uint64_t lost, const peer::SessionStats& st, double seconds) {
-  Line("summary")
+                   std::uint64_t lost, const peer::SessionStats& st, double seconds,
+                   const MarkerPainter* markers) {
+  Line line("summary");
+  if (markers)
+    line.num("markers_made", markers->made())
+        .num("markers_acknowledged", markers->acknowledged())
+        .num("markers_lost", markers->lost(session.base()).size())
+        .raw("marked", json_list(MarkerPainter::present(session.base())));
+  line
       .num("id", session.id())
       .raw("t", now_ms())
       .num("version", session.version())
@@ -314,6 +355,8 @@ void print_summary(const peer::Session& session, const Mesh& local, std::uint32_
       .num("submit_bytes", st.submit_bytes)
       .num("versions_applied", st.versions_applied)
       .num("rebases", st.rebases)
+      .num("branch_rebases", st.branch_rebases)
+      .num("branch_versions_dropped", st.branch_versions_dropped)
       .num("merges", st.merges)
       .num("merged_strokes", st.merged_strokes)
       .num("conflicting_strokes", st.conflicting_strokes)
@@ -386,11 +429,20 @@ CLI::App* add_peer_command(CLI::App& app, PeerCommandOptions& o) {
   p->add_option("--seed", o.seed, "stroke script seed")->capture_default_str();
   p->add_option("--linger", o.linger,
                 "seconds to keep syncing after editing stops; a line 'quit' or end of file on "
-                "stdin ends the run earlier")
+                "stdin ends the run earlier, a line 'stop-editing' stops the strokes")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1e6));
   p->add_flag("--ignore-stdin", o.ignore_stdin,
               "do not read stdin (run for --seconds + --linger regardless)");
+  p->add_flag("--markers", o.markers,
+              "with each stroke, a marker (one vertex of a 'marker' channel set to 1) whose "
+              "presence the summary checks in the agreed mesh; the creator adds the channel");
+  p->add_option("--marker-slot", o.marker_slot,
+                "which markable vertices are this peer's (0-15; default: its id mod 16)")
+      ->check(CLI::Range(0, 15));
+  p->add_option("--marker-first", o.marker_first,
+                "index of the first marker (a restarted peer makes new markers from here)");
+  p->add_option("--marker-limit", o.marker_limit, "markers to make at most");
   p->add_option("--out", o.out, "final mesh to write (PLY/OBJ; PLY keeps an attribution channel)");
   CLI::Option* journal = p->add_option(
       "--journal", o.journal,
@@ -424,8 +476,13 @@ int run_peer(const PeerCommandOptions& o) {
     ao.submit_every = so.sync;
     SimulatedArtist artist(*session, ao);
     if (!o.resume.empty()) artist.local() = std::move(resumed);  // the unmerged edits are back
+    std::optional<MarkerPainter> markers;
+    if (o.markers)
+      markers.emplace(static_cast<std::uint32_t>(o.marker_slot >= 0 ? std::uint64_t(o.marker_slot)
+                                                                     : session->id() % kMarkerSlots),
+                      o.marker_first, o.marker_limit, session->base());
     const auto start = peer::Clock::now();
-    edit_and_sync(o, *session, artist, start);
+    edit_and_sync(o, *session, artist, markers ? &*markers : nullptr, start);
 
     // The summary describes the state at the end of editing and syncing; leaving then tells
     // the others at once rather than letting them wait for the expiry threshold.
@@ -434,7 +491,8 @@ int run_peer(const PeerCommandOptions& o) {
     const std::uint64_t lost = artist.unacknowledged();
     if (!o.out.empty()) write_final_mesh(*session, local, o.out);
     const double seconds = std::chrono::duration<double>(peer::Clock::now() - start).count();
-    print_summary(*session, local, artist.strokes(), lost, st, seconds);
+    print_summary(*session, local, artist.strokes(), lost, st, seconds,
+                  markers ? &*markers : nullptr);
     session->leave();
     return 0;
   } catch (const std::exception& e) {

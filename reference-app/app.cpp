@@ -130,7 +130,7 @@ void App::layout_changed() {
 void App::host_session() {
   std::string error;
   std::unique_ptr<csc_mesh, MeshDeleter> mesh(document_.to_csc_mesh(error));
-  if (!mesh || !session_.host(mesh.get(), document_arrays(), error)) {
+  if (!mesh || !session_.host(mesh.get(), document_arrays(), artist_name(), error)) {
     report(error);
     return;
   }
@@ -141,7 +141,12 @@ void App::host_session() {
 
 void App::join_session(const std::string& invite) {
   if (drag_ == Drag::stroke) end_stroke();
-  session_.begin_join(invite);
+  session_.begin_join(invite, artist_name());
+}
+
+std::string App::artist_name() const {
+  const std::string typed = name_text_.data();
+  return typed.empty() ? options_.name : typed;
 }
 
 // The session's attribution colours (who edited where) drawn in place of the albedo.
@@ -274,12 +279,20 @@ void App::finish() {
   if (!options_.save_path.empty() && !document_.save(options_.save_path, error)) report(error);
   if (session_.active()) {  // for scripts: where this peer's session stood when it quit
     const csc_session_stats& stats = session_.stats();
+    std::string names;  // the others' names as the peer list shows them (spaces and commas as _)
+    for (const SessionLink::Peer& peer : session_.peers()) {
+      std::string name = peer.name;
+      for (char& c : name)
+        if (c == ' ' || c == ',') c = '_';
+      names += (names.empty() ? "" : ",") + name;
+    }
     std::printf("SESSION id=%016llx merger=%016llx version=%llu members=%u submitted=%llu acknowledged=%llu "
-                "presence=%zu\n",
+                "presence=%zu peers=%s\n",
                 static_cast<unsigned long long>(session_.id()), static_cast<unsigned long long>(stats.merger),
                 static_cast<unsigned long long>(session_.version()), stats.members,
                 static_cast<unsigned long long>(stats.strokes_submitted),
-                static_cast<unsigned long long>(stats.strokes_acknowledged), session_.presence_seen());
+                static_cast<unsigned long long>(stats.strokes_acknowledged), session_.presence_seen(),
+                names.c_str());
     std::fflush(stdout);
   }
   session_.leave();

@@ -60,6 +60,7 @@ class App final : public InputHandlers {
   MeshArrays document_arrays() const;
   void host_session();
   void join_session(const std::string& invite);
+  std::string artist_name() const;  // the panel's name field, else --name
   void report(const std::string& message);
   void toggle_attribution_view();
   void finish();
@@ -119,6 +120,7 @@ class App final : public InputHandlers {
   std::vector<float> attribution_rgb_;
   std::string error_;
   std::array<char, 4096> join_text_{};
+  std::array<char, 64> name_text_{};  // the panel's name field; empty: --name's
   std::array<char, 1024> path_text_{};
   std::string shown_message_;
 

@@ -1,17 +1,20 @@
 #include "options.h"
 
 #include <charconv>
+#include <cstdlib>
 #include <cstring>
 
 namespace {
 
 constexpr const char* kUsage =
-    "usage: csculpt-app [MESH] [--host | --join INVITE] [--replay FILE] [--save PATH]\n"
+    "usage: csculpt-app [MESH] [--host | --join INVITE] [--name NAME] [--replay FILE]\n"
+    "                   [--save PATH]\n"
     "                   [--screenshot PATH] [--exit-after SECONDS] [--bench-frames N]\n"
     "                   [--bench-warmup S] [--sphere-faces N] [--size WxH]\n"
     "  MESH            a .ply/.obj/.off/.stl file; without it, a built-in sphere\n"
     "  --host          host a session; prints `INVITE <invite>` on stdout\n"
     "  --join INVITE   join the session of INVITE\n"
+    "  --name NAME     your name in the session's peer list (default $USER)\n"
     "  --replay FILE   feed recorded input events (see reference-app/README.md)\n"
     "  --save PATH     write the mesh (PLY: every channel) on exit\n"
     "  --screenshot P  write a PNG of the window on exit\n"
@@ -20,6 +23,9 @@ constexpr const char* kUsage =
     "  --bench-warmup S  run S seconds of untimed frames before the benchmark\n"
     "  --sphere-faces N  faces of the built-in sphere (default 160000)\n"
     "  --size WxH      window size (default 1280x800)\n";
+
+// A name fits the panel's text field (and the library's 256-byte limit).
+constexpr size_t kMaxName = 63;
 
 template <typename T>
 bool parse_number(const char* text, T& out) {
@@ -47,6 +53,10 @@ ParseResult parse_options(int argc, char** argv) {
     } else if (arg == "--join") {
       if (!value(v)) return fail("--join needs an invite");
       options.join_invite = v;
+    } else if (arg == "--name") {
+      if (!value(v) || !*v || std::strlen(v) > kMaxName)
+        return fail("--name needs a name of 1 to " + std::to_string(kMaxName) + " bytes");
+      options.name = v;
     } else if (arg == "--replay") {
       if (!value(v)) return fail("--replay needs a file");
       options.replay_path = v;
@@ -85,6 +95,10 @@ ParseResult parse_options(int argc, char** argv) {
     } else {
       return fail("only one mesh file can be opened");
     }
+  }
+  if (options.name.empty()) {
+    const char* user = std::getenv("USER");
+    options.name = user && *user && std::strlen(user) <= kMaxName ? user : "artist";
   }
   if (options.host && !options.join_invite.empty()) return fail("--host and --join exclude each other");
   return {options, "", 0};

@@ -9,6 +9,7 @@ struct AppOptions {
   std::string mesh_path;  // empty: the built-in sphere
   bool host = false;
   std::string join_invite;  // empty: no join
+  std::string name;         // shown to the other artists; default $USER, else "artist"
   std::string replay_path;
   std::string save_path;
   std::string screenshot_path;

@@ -156,6 +156,8 @@ void App::draw_session_panel() {
     ImGui::InputTextWithHint("##invite", "paste an invite", join_text_.data(), join_text_.size());
     ImGui::SameLine();
     if (ImGui::Button("Join")) join_session(join_text_.data());
+    // Below the buttons, so that hosting and joining stay where scripts and habits find them.
+    ImGui::InputTextWithHint("Name", options_.name.c_str(), name_text_.data(), name_text_.size());
   } else {
     // The buttons first, where "Host a session" was: the invite's length never moves them.
     const csc_session_stats& stats = session_.stats();

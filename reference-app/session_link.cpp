@@ -6,9 +6,10 @@ constexpr size_t kMaxNotes = 4;
 
 }  // namespace
 
-bool SessionLink::host(const csc_mesh* mesh, MeshArrays arrays, std::string& error) {
+bool SessionLink::host(const csc_mesh* mesh, MeshArrays arrays, const std::string& name,
+                       std::string& error) {
   csc_session_options options = CSC_SESSION_OPTIONS_INIT;
-  options.name = "csculpt-app";
+  options.name = name.c_str();
   csc_session* session = nullptr;
   // Created here, not on the worker: the invite is printed before the first frame (the
   // scripting contract), and creating costs one hierarchy build, once.
@@ -24,8 +25,8 @@ bool SessionLink::host(const csc_mesh* mesh, MeshArrays arrays, std::string& err
   return true;
 }
 
-void SessionLink::begin_join(const std::string& invite) {
-  worker_ = std::make_unique<SessionWorker>(invite);
+void SessionLink::begin_join(const std::string& invite, const std::string& name) {
+  worker_ = std::make_unique<SessionWorker>(invite, name);
   joined_ = false;
   status_ = "joining...";
 }

@@ -24,9 +24,9 @@ class SessionLink {
 
   /** Hosts a session on `mesh` (copied; `arrays` are the same values as the app keeps them).
    *  On failure `error` says why. */
-  bool host(const csc_mesh* mesh, MeshArrays arrays, std::string& error);
-  /** Starts joining in the background; poll_join() tells when it is done. */
-  void begin_join(const std::string& invite);
+  bool host(const csc_mesh* mesh, MeshArrays arrays, const std::string& name, std::string& error);
+  /** Starts joining in the background as `name`; poll_join() tells when it is done. */
+  void begin_join(const std::string& invite, const std::string& name);
   /** While joining: 1 when the session is ready (take_joined_mesh() for the document), -1
    *  when the join failed (`error`), 0 while still waiting. */
   int poll_join(std::string& error);

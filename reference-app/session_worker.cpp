@@ -22,7 +22,6 @@ std::string abi_error(const char* what, csc_status status) {
 
 csc_session_options app_options() {
   csc_session_options options = CSC_SESSION_OPTIONS_INIT;
-  options.name = "csculpt-app";
   options.join_timeout_ms = 10000;
   return options;
 }
@@ -89,7 +88,7 @@ SessionWorker::SessionWorker(csc_session* session, MeshArrays initial)
   thread_ = std::thread([this] { run({}); });
 }
 
-SessionWorker::SessionWorker(std::string invite) {
+SessionWorker::SessionWorker(std::string invite, std::string name) : name_(std::move(name)) {
   local_view_.status = "joining...";
   view_ = local_view_;
   thread_ = std::thread([this, invite = std::move(invite)] { run(invite); });
@@ -188,7 +187,8 @@ void SessionWorker::run(std::string invite) {
 }
 
 bool SessionWorker::join(const std::string& invite) {
-  const csc_session_options options = app_options();
+  csc_session_options options = app_options();
+  options.name = name_.c_str();
   csc_session* session = nullptr;
   csc_mesh* base = nullptr;
   csc_status s = csc_session_join(&session, invite.c_str(), &options);

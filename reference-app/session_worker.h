@@ -83,7 +83,7 @@ class SessionWorker {
    *  the arrays it was created from. */
   SessionWorker(csc_session* session, MeshArrays initial);
   /** Starts joining `invite` on the worker; joined() and take_joined_mesh() tell the result. */
-  explicit SessionWorker(std::string invite);
+  SessionWorker(std::string invite, std::string name);
   ~SessionWorker();  // leaves the session and stops the thread
   SessionWorker(const SessionWorker&) = delete;
   SessionWorker& operator=(const SessionWorker&) = delete;
@@ -136,6 +136,7 @@ class SessionWorker {
 
   // the worker's own state
   csc_session* session_ = nullptr;
+  std::string name_;  // ours in the session (a joiner's; the host's went to csc_session_create)
   MeshArrays mirror_, shown_;  // the session's side; what the UI's document holds
   uint32_t strokes_unsent_ = 0;
   uint64_t done_ = 0;  // strokes, undos and redos applied to the mirror

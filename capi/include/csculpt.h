@@ -592,7 +592,7 @@ typedef struct csc_session_stats {
   uint64_t submits;
   uint64_t submit_bytes;
   uint64_t strokes_submitted;
-  uint64_t strokes_acknowledged; /**< seen inside a merged version */
+  uint64_t strokes_acknowledged; /**< in a version csc_session_update applied */
   uint64_t versions_applied;
   uint64_t rebases;
   uint64_t merges; /**< as the merger */

@@ -95,9 +95,9 @@ void HostChannel::set_frame_and_attribution(const MergeFrame& frame,
   attribution_ = std::move(attribution);
 }
 
-Bytes HostChannel::encode_snapshot_of(const Mesh& mesh) const {
+Bytes HostChannel::encode_snapshot_of(const Mesh& mesh, const ChainHistory& chains) const {
   std::lock_guard lock(mutex_);
-  return encode_snapshot(mesh, frame_, attribution_);
+  return encode_snapshot(mesh, frame_, attribution_, chains);
 }
 
 void HostChannel::set_hierarchy(std::shared_ptr<const Hierarchy> hierarchy) {

@@ -10,6 +10,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -38,6 +39,9 @@ struct HostItem {
   Diff merged;                           ///< version: the diff from version - 1
   std::vector<MergedSubmit> merged_by;   ///< version: the submits it includes
   std::shared_ptr<const Snapshot> snap;  ///< snapshot
+  /// snapshot: the latest version its branch and the one we held share (nullopt: none known).
+  /// Below our version, we held another branch: what it had since is merged, not dropped.
+  std::optional<std::uint64_t> fork;
 };
 
 /// At most this many events wait for poll_events (the oldest go first).
@@ -99,8 +103,8 @@ class HostChannel {
   /// A snapshot's merge frame and attribution, replacing ours.
   void set_frame_and_attribution(const MergeFrame& frame,
                                  std::map<PeerId, std::vector<float>> attribution);
-  /// The bytes of a snapshot of `mesh` with our frame and attribution.
-  Bytes encode_snapshot_of(const Mesh& mesh) const;
+  /// The bytes of a snapshot of `mesh` with our frame and attribution, and `chains`.
+  Bytes encode_snapshot_of(const Mesh& mesh, const ChainHistory& chains) const;
 
   void set_hierarchy(std::shared_ptr<const Hierarchy> hierarchy);
   std::shared_ptr<const Hierarchy> hierarchy() const;

@@ -30,9 +30,19 @@ void check_position(const Vec3f& p, std::uint32_t v, const MergeFrame& frame,
   refuse(what, m.str());
 }
 
+/// How far outside its range a channel value may lie and still be accepted: float rounding in a
+/// host's own brush or in a rebase leaves values a hair beyond a bound (-4e-12 for a metallic of
+/// 0 was seen), which are edits as meant, not bad values. Merges clamp them into the range.
+double range_slack(const ChannelDesc& desc) {
+  const double span = double{desc.max_value} - double{desc.min_value};
+  return std::isfinite(span) ? kRangeSlack * span : 0.0;
+}
+
 void check_channel_value(float value, const ChannelDesc& desc, std::uint32_t v,
                          std::string_view what) {
-  if (std::isfinite(value) && value >= desc.min_value && value <= desc.max_value) return;
+  const double slack = range_slack(desc);
+  if (std::isfinite(value) && value >= desc.min_value - slack && value <= desc.max_value + slack)
+    return;
   std::ostringstream m;
   m << "the " << desc.name << " value of vertex " << v << " (" << value << ") ";
   if (!std::isfinite(value))

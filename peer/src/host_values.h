@@ -16,10 +16,13 @@ namespace csculpt::peer {
 /// How far from the session's centre a position may be, in initial bounding-box diagonals:
 /// far beyond any legitimate grab, close enough that the merge's arithmetic stays sound.
 inline constexpr float kMaxReach = 1000.f;
+/// How far outside its range a channel value is still accepted, as a share of the range.
+inline constexpr double kRangeSlack = 1e-3;
 
 /// Throws InvalidInput ("`what`: ...") at the first value of `local` that differs from
 /// `base` (same layout) and is not finite, is a position farther than kMaxReach x frame.scale
-/// from frame.center, or is a channel value outside the channel's range. Values equal to the
+/// from frame.center, or is a channel value outside the channel's range (by more than kRangeSlack
+/// of it). Values equal to the
 /// base's came from the session and are not the host's to answer for.
 void check_host_values(const Mesh& local, const Mesh& base, const MergeFrame& frame,
                        std::string_view what);

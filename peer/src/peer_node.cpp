@@ -13,7 +13,8 @@ PeerNode::PeerNode(const Invite& invite, bool creator, const SessionOptions& opt
     : options_(options),
       invite_(invite),
       self_(options.id ? options.id : random_u64() | 1),
-      transport_(invite, self_, options.bind, options.max_message_bytes),
+      transport_(invite, self_, options.bind, options.max_message_bytes,
+                 options.membership.heartbeat, options.membership.evasive),
       membership_(self_, transport_.endpoint(), options.membership),
       election_(self_) {
   if (creator) invite_.endpoint = transport_.endpoint();
@@ -379,8 +380,10 @@ void PeerNode::on_snapshot_chunk(const fb::SnapshotChunk& c) {
 /// The assembled snapshot becomes our version: the joiner's first, or a diverged peer's way
 /// back to the merger's history.
 void PeerNode::install_snapshot(std::shared_ptr<const Snapshot> snap) {
+  const std::optional<std::uint64_t> fork =
+      joined_ ? replication_.fork_point(snap->chains) : std::nullopt;
   base_ = snap->mesh;
-  replication_.reset(snapshot_.version(), snapshot_.chain());
+  replication_.reset(snapshot_.version(), snapshot_.chain(), snap->chains);
   snapshot_requested_ = false;
   if (merger_) merger_->clear();
   frame_ = snap->frame;
@@ -392,6 +395,7 @@ void PeerNode::install_snapshot(std::shared_ptr<const Snapshot> snap) {
   item.snapshot = true;
   item.version = replication_.version();
   item.snap = std::move(snap);
+  item.fork = fork;
   host_.push_item(std::move(item), [](SessionStats&) {});
   if (!joined_) {
     joined_ = true;
@@ -425,11 +429,34 @@ void PeerNode::elect() {
   if (d.changed && election_.merger()) merger_changed();
 }
 
-/// Applies the membership thresholds: evasive peers reported, expired ones forgotten.
+/// Applies the membership thresholds: evasive peers reported, expired ones forgotten (their
+/// endpoints greeted for a while: they may be across a partition that heals).
 void PeerNode::expire(Clock::time_point now) {
+  const std::map<PeerId, Member> before = membership_.members();
   const Membership::Changes changes = membership_.tick(now);
   for (PeerId p : changes.evasive) event(EventKind::peer_evasive, p);
-  for (PeerId p : changes.expired) departed(p, "expired");
+  for (PeerId p : changes.expired) {
+    if (const auto it = before.find(p); it != before.end() && !it->second.endpoint.empty())
+      lost_[it->second.endpoint] = now;
+    departed(p, "expired");
+  }
+}
+
+/// A hello to every lost endpoint, every four heartbeats: whoever answers is a member again
+/// (on_hello), and both sides of a healed partition meet whichever spoke first.
+void PeerNode::greet_lost(Clock::time_point now) {
+  if (now < next_greeting_) return;
+  next_greeting_ = now + 4 * options_.membership.heartbeat;
+  for (auto it = lost_.begin(); it != lost_.end();) {
+    const bool member = std::any_of(membership_.members().begin(), membership_.members().end(),
+                                    [&](const auto& m) { return m.second.endpoint == it->first; });
+    if (member || now - it->second > kGreetLostFor) {
+      it = lost_.erase(it);
+      continue;
+    }
+    transport_.send(it->first, hello(false));
+    ++it;
+  }
 }
 
 /// `peer` is no longer a member: what it sent for merging, its version and its cursor go.
@@ -465,11 +492,7 @@ void PeerNode::apply_version(VersionRecord r) {
   item.version = version;
   item.merged = std::move(merged);
   item.merged_by = kept.merged;
-  host_.push_item(std::move(item), [&](SessionStats& s) {
-    s.version = version;
-    for (const MergedSubmit& m : kept.merged)
-      if (m.peer == self_) s.strokes_acknowledged += m.strokes;
-  });
+  host_.push_item(std::move(item), [&](SessionStats& s) { s.version = version; });
   event(EventKind::version, election_.merger().value_or(0));
 }
 
@@ -506,7 +529,7 @@ void PeerNode::request_snapshot(PeerId from) {
 
 void PeerNode::send_snapshot(PeerId peer) {
   if (!joined_) return;
-  const Bytes bytes = host_.encode_snapshot_of(base_);
+  const Bytes bytes = host_.encode_snapshot_of(base_, replication_.recent_chains(kChainsSent));
   host_.update_stats([](SessionStats& s) { ++s.snapshots_sent; });
   const std::size_t chunk = std::max<std::size_t>(1024, options_.snapshot_chunk_bytes);
   for (std::size_t offset = 0; offset < bytes.size(); offset += chunk) {
@@ -550,7 +573,7 @@ void PeerNode::heartbeat(Clock::time_point now) {
   // sockets of peers no longer members close only some time after they went.
   transport_.close_departed(
       [&](const std::string& endpoint) {
-        if (endpoint == joining_endpoint_) return true;
+        if (endpoint == joining_endpoint_ || lost_.count(endpoint)) return true;
         for (const auto& [id, m] : membership_.members())
           if (m.endpoint == endpoint) return true;
         return false;
@@ -558,6 +581,7 @@ void PeerNode::heartbeat(Clock::time_point now) {
       now, 2 * options_.membership.expired);
   elect();
   for (const Member* m : membership_.others()) send_heartbeat_to(m->endpoint);
+  greet_lost(now);
 }
 
 void PeerNode::send_heartbeat_to(const std::string& endpoint) {

@@ -30,6 +30,10 @@
 
 namespace csculpt::peer {
 
+/// How long the endpoints of expired members are greeted (PeerNode::greet_lost): longer than
+/// the partitions a session heals from.
+constexpr Millis kGreetLostFor{10 * 60 * 1000};
+
 class PeerNode {
  public:
   /// Binds this peer's socket (the creator's endpoint goes into its invite). Throws IoError.
@@ -97,6 +101,7 @@ class PeerNode {
   void elect();
   void expire(Clock::time_point now);
   void departed(PeerId peer, const char* how);
+  void greet_lost(Clock::time_point now);
   void report_revived();
 
   // replication glue
@@ -163,6 +168,11 @@ class PeerNode {
   bool snapshot_requested_ = false;
   PresenceSender presence_;  // when our cursor goes out
   PeerTable peer_table_;     // names, round trips, who left lately
+  /// Endpoints of members that expired (not of those that said they leave), greeted every few
+  /// heartbeats for kGreetLostFor: after a partition each side took the other for dead and
+  /// sends it nothing, so without this nobody would speak first when the network heals.
+  std::map<std::string, Clock::time_point> lost_;  // endpoint -> when it expired
+  Clock::time_point next_greeting_{};
 
   std::optional<Journal> journal_;  // SessionOptions::journal, once opened
   /// A resumed peer merges from then on (it waits for the others' newer versions first).

@@ -47,7 +47,9 @@ void PeerNode::create_journal() {
 
 /// A snapshot of our version and a fresh log after it.
 void PeerNode::snapshot_into(Journal& j) {
-  j.reset(host_.encode_snapshot_of(base_), replication_.version(), replication_.chain());
+  // With the chains before it, so a resumed peer still finds where another branch forked.
+  j.reset(host_.encode_snapshot_of(base_, replication_.recent_chains(kChainsSent)),
+          replication_.version(), replication_.chain());
   host_.update_stats([](SessionStats& s) { ++s.journal_snapshots; });
 }
 
@@ -77,7 +79,7 @@ void PeerNode::start_resumed(const Snapshot& snap, JournalState& state) {
   frame_ = snap.frame;
   host_.set_frame_and_attribution(snap.frame, snap.attribution);
   build_merge_state();
-  replication_.reset(state.version, state.chain);
+  replication_.reset(state.version, state.chain, snap.chains);
   joined_ = true;
   event(EventKind::joined, self_);
   host_.set_joined();

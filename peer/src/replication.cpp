@@ -12,10 +12,21 @@ std::uint64_t next_chain(std::uint64_t parent, const Diff& merged) {
   return hash_mix(parent, digest(merged));
 }
 
-void Replication::reset(std::uint64_t version, std::uint64_t chain) {
+void Replication::reset(std::uint64_t version, std::uint64_t chain, const ChainHistory& known) {
   version_ = version;
   chain_ = chain;
   history_.clear();
+  history_bytes_ = 0;
+  chains_.clear();
+  const bool fits = !known.chains.empty() && known.chains.back() == chain &&
+                    known.first + known.chains.size() - 1 == version;
+  if (fits) {
+    chains_.assign(known.chains.begin(), known.chains.end());
+    chains_first_ = known.first;
+  } else {
+    chains_.push_back(chain);
+    chains_first_ = version;
+  }
 }
 
 Replication::Arrival Replication::classify(std::uint64_t version,
@@ -55,15 +66,42 @@ Diff Replication::accept(VersionRecord r, Mesh& base) {
   apply_diff(merged, base);
   version_ = r.version;
   chain_ = r.chain;
+  if (chains_.empty()) chains_first_ = version_;  // a history that started with no reset()
+  chains_.push_back(chain_);
+  if (chains_.size() > kChainsKept) {
+    chains_.pop_front();
+    ++chains_first_;
+  }
+  history_bytes_ += r.diff_bytes.size();
   history_.push_back(std::move(r));
-  if (history_.size() > kHistory) history_.pop_front();
+  while (history_.size() > 1 && history_bytes_ > kHistoryBytes) {
+    history_bytes_ -= history_.front().diff_bytes.size();
+    history_.pop_front();
+  }
   return merged;
 }
 
 std::optional<std::uint64_t> Replication::chain_at(std::uint64_t version) const {
   if (version == version_) return chain_;
-  for (const VersionRecord& r : history_)
-    if (r.version == version) return r.chain;
+  if (version < chains_first_ || version - chains_first_ >= chains_.size()) return std::nullopt;
+  return chains_[version - chains_first_];
+}
+
+ChainHistory Replication::recent_chains(std::size_t count) const {
+  ChainHistory h;
+  const std::size_t n = std::min(count, chains_.size());
+  h.first = chains_first_ + (chains_.size() - n);
+  h.chains.assign(chains_.end() - static_cast<std::ptrdiff_t>(n), chains_.end());
+  return h;
+}
+
+std::optional<std::uint64_t> Replication::fork_point(const ChainHistory& theirs) const {
+  if (theirs.chains.empty()) return std::nullopt;
+  const std::uint64_t last = std::min(version_, theirs.first + theirs.chains.size() - 1);
+  // Chains fold in every version before them: equal at v means equal up to v, so the search
+  // could bisect; a linear scan from the end is as fast for the short forks partitions make.
+  for (std::uint64_t v = last + 1; v-- > std::max(chains_first_, theirs.first);)
+    if (chain_at(v) == theirs.chains[v - theirs.first]) return v;
   return std::nullopt;
 }
 

@@ -13,11 +13,20 @@
 #include "csculpt/diff.h"
 #include "csculpt/mesh.h"
 #include "messages.h"
+#include "snapshot.h"
 
 namespace csculpt::peer {
 
-/// Versions kept to answer fetches, and at most this many buffered ahead of a gap.
+/// At most this many versions are buffered ahead of a gap.
 constexpr std::size_t kHistory = 256;
+/// Versions kept to answer fetches: the latest, up to this many bytes of diffs (a peer behind by
+/// more gets a snapshot).
+constexpr std::size_t kHistoryBytes = std::size_t{128} << 20;
+/// The chains of this many versions are kept (8 bytes each): enough to find where two branches
+/// forked after hours of partition.
+constexpr std::size_t kChainsKept = std::size_t{1} << 20;
+/// The chains a snapshot carries, so that its receiver finds the fork point (snapshot.h).
+constexpr std::size_t kChainsSent = std::size_t{1} << 14;
 /// The chain of a session's version 0.
 constexpr std::uint64_t kGenesisChain = 0x243f6a8885a308d3ull;
 
@@ -30,8 +39,9 @@ class Replication {
   std::uint64_t chain() const { return chain_; }
 
   /// Holds `version` with `chain` and nothing else (the session's start, or a snapshot: the
-  /// versions kept before are another branch's, not ours to serve).
-  void reset(std::uint64_t version, std::uint64_t chain);
+  /// versions kept before are another branch's, not ours to serve). `known`: the chains
+  /// before it (a snapshot's), kept when they end at `version` with `chain`.
+  void reset(std::uint64_t version, std::uint64_t chain, const ChainHistory& known = {});
 
   /// What a received version is to us.
   enum class Arrival {
@@ -58,6 +68,11 @@ class Replication {
 
   /// Our chain at `version`, if we still hold it.
   std::optional<std::uint64_t> chain_at(std::uint64_t version) const;
+  /// Our chains of the last `count` versions (ours included).
+  ChainHistory recent_chains(std::size_t count) const;
+  /// The latest version at which `theirs` and ours have the same chain: where two branches
+  /// forked (ours, if theirs holds it). Nullopt when the two lists share no such version.
+  std::optional<std::uint64_t> fork_point(const ChainHistory& theirs) const;
   /// Whether someone's `chain` at `version` is not ours there (unknown versions do not count).
   bool diverges(std::uint64_t version, std::uint64_t chain) const;
   /// The kept versions after `after`, oldest first, to answer a fetch; nullopt when some of
@@ -67,7 +82,10 @@ class Replication {
  private:
   std::uint64_t version_ = 0;
   std::uint64_t chain_ = 0;
-  std::deque<VersionRecord> history_;                // the last kHistory versions accepted
+  std::deque<VersionRecord> history_;                // the latest accepted, kHistoryBytes
+  std::size_t history_bytes_ = 0;                    // of history_'s diffs
+  std::deque<std::uint64_t> chains_;                 // at chains_first_, ..., version_
+  std::uint64_t chains_first_ = 0;
   std::map<std::uint64_t, VersionRecord> buffered_;  // version -> arrived ahead of its turn
 };
 

@@ -17,6 +17,7 @@
 #include "peer_node.h"
 #include "presence.h"
 #include "rebase.h"
+#include "revert_log.h"
 #include "undo_stack.h"
 
 namespace csculpt::peer {
@@ -53,10 +54,17 @@ struct Session::Impl {
   std::uint32_t unacknowledged_strokes = 0;
   std::map<std::uint64_t, std::uint32_t> strokes_at;
   UndoStack undo;
+  /// The values each applied version overwrote: how base steps back to a fork point.
+  RevertLog reverts;
   /// Versions and snapshots taken from the network thread and not yet applied.
   std::deque<HostItem> pending;
   // the host side's statistics
-  std::uint64_t versions_applied = 0, rebases = 0, strokes_submitted = 0;
+  std::uint64_t versions_applied = 0, rebases = 0, strokes_submitted = 0, branch_rebases = 0,
+                branch_versions_dropped = 0;
+  /// Counted here, as the host applies a version holding them, never from what the network
+  /// thread saw: a version of a branch that lost is never applied, and what it held is sent
+  /// again and counted once, when the surviving chain has it.
+  std::uint64_t strokes_acknowledged = 0;
 
   /// Refuses a host mesh of another layout (naming `call`), then makes the merge state.
   void ready_for(const Mesh& local, const char* call) {
@@ -79,6 +87,9 @@ struct Session::Impl {
   /// unmerged edit) put into `local` at its base version. True when `local` holds edits to send.
   bool replay_journal(const std::optional<OwnEdit>& own, Mesh& local);
   void restore_own(const OwnEdit& own, Mesh& local);
+  /// The mesh `item`'s snapshot branched from: our base stepped back to the fork point when
+  /// we held another branch, so that branch's versions since are carried over, not dropped.
+  Mesh fork_base(const HostItem& item);
   /// Applies a merged version; true if an edit we submitted was left out of it (resend).
   bool apply_version(const HostItem& item, Mesh& local);
 };
@@ -197,7 +208,7 @@ bool Session::Impl::replay_journal(const std::optional<OwnEdit>& own, Mesh& loca
   // Counted from the restart on: the strokes still unacknowledged are submitted again.
   if (!unmerged) unacknowledged_strokes = 0;
   strokes_submitted = unacknowledged_strokes;
-  node->host().update_stats([](SessionStats& st) { st.strokes_acknowledged = 0; });
+  strokes_acknowledged = 0;
   return unmerged;
 }
 
@@ -252,12 +263,26 @@ bool Session::submit(Mesh& local, std::uint32_t strokes) {
   return true;
 }
 
+Mesh Session::Impl::fork_base(const HostItem& item) {
+  Mesh from = base;
+  // No common version known: the whole kept history is carried (what both branches share
+  // merges as one intent, SameChange::once).
+  const std::uint64_t fork = item.fork.value_or(0);
+  if (fork >= version) return from;  // our branch is the snapshot's: nothing of ours is lost
+  const std::uint64_t reached = reverts.revert(from, version, fork);
+  ++branch_rebases;
+  if (item.fork) branch_versions_dropped += reached - fork;
+  return from;
+}
+
 void Session::Impl::apply_snapshot(const HostItem& item, Mesh& local) {
   const Mesh& snap = item.snap->mesh;
   if (has_base) {
-    // Carry the local edits (relative to the old base) over to the snapshot.
+    // Carry the local edits, and our branch's versions since the fork, over to the snapshot.
     ensure_merge_state();
-    if (rebase_onto_snapshot(base, snap, local, *merger, frame)) ++rebases;
+    Mesh from = fork_base(item);
+    if (rebase_onto_snapshot(from, snap, local, *merger, frame)) ++rebases;
+    base = std::move(from);  // the snapshot now
   } else {
     local = snap;
     base = snap;
@@ -265,7 +290,9 @@ void Session::Impl::apply_snapshot(const HostItem& item, Mesh& local) {
   has_base = true;
   version = item.version;
   submitted.clear();
+  strokes_at.clear();  // those submits are not in the snapshot: their strokes go out again
   last_submit_digest = 0;
+  reverts.clear();  // the versions it stepped back were another branch's
   ensure_merge_state();
 }
 
@@ -279,9 +306,13 @@ bool Session::Impl::apply_version(const HostItem& item, Mesh& local) {
       if (auto it = submitted.find(m.sequence); it != submitted.end()) {
         ours = &it->second;
         merged_sequence = m.sequence;
-        if (auto st = strokes_at.find(m.sequence); st != strokes_at.end())
-          unacknowledged_strokes -= std::min(unacknowledged_strokes, st->second);
+        if (auto st = strokes_at.find(m.sequence); st != strokes_at.end()) {
+          const std::uint32_t acknowledged = std::min(unacknowledged_strokes, st->second);
+          unacknowledged_strokes -= acknowledged;
+          strokes_acknowledged += acknowledged;
+        }
       }
+  reverts.record(item.version, item.merged, base);
   if (rebase_onto_version(base, ours, item.merged, local, *merger, frame)) ++rebases;
   version = item.version;
   const bool resend = !submitted.empty() && submitted.rbegin()->first != merged_sequence;
@@ -308,7 +339,8 @@ std::size_t Session::update(Mesh& local) {
   while (!s.pending.empty()) {
     HostItem& item = s.pending.front();
     if (item.snapshot) {
-      resend |= !s.submitted.empty();
+      // Edits submitted but not in the snapshot, or a lost branch's carried over: sent again.
+      resend |= !s.submitted.empty() || (s.has_base && item.fork.value_or(0) < s.version);
       s.apply_snapshot(item, local);
       ++applied;
     } else if (item.version == s.version + 1) {  // always: the node hands them in order
@@ -357,7 +389,10 @@ SessionStats Session::stats() const {
   SessionStats st = impl_->node->host().stats();
   st.versions_applied = impl_->versions_applied;
   st.rebases = impl_->rebases;
+  st.branch_rebases = impl_->branch_rebases;
+  st.branch_versions_dropped = impl_->branch_versions_dropped;
   st.strokes_submitted = impl_->strokes_submitted;
+  st.strokes_acknowledged = impl_->strokes_acknowledged;
   return st;
 }
 

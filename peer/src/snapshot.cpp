@@ -38,7 +38,8 @@ void decode_attribution(const fb::MeshSnapshot& s, std::size_t n, Snapshot& out)
 }  // namespace
 
 std::vector<std::uint8_t> encode_snapshot(const Mesh& mesh, const MergeFrame& frame,
-                                          const std::map<PeerId, std::vector<float>>& attrib) {
+                                          const std::map<PeerId, std::vector<float>>& attrib,
+                                          const ChainHistory& chains) {
   flatbuffers::FlatBufferBuilder b(mesh.vertex_count() * 16 + mesh.face_count() * 12 + 1024);
   const auto positions = b.CreateVector(reinterpret_cast<const float*>(mesh.positions.data()),
                                         mesh.positions.size() * 3);
@@ -61,8 +62,10 @@ std::vector<std::uint8_t> encode_snapshot(const Mesh& mesh, const MergeFrame& fr
   }
   const auto peer_vector = b.CreateVector(peers);
   const auto value_vector = b.CreateVector(values);
+  const auto chain_vector = b.CreateVector(chains.chains);
   b.Finish(fb::CreateMeshSnapshot(b, positions, triangles, channel_vector, frame_center,
-                                  frame.scale, peer_vector, value_vector));
+                                  frame.scale, peer_vector, value_vector, chains.first,
+                                  chain_vector));
   return {b.GetBufferPointer(), b.GetBufferPointer() + b.GetSize()};
 }
 
@@ -91,6 +94,8 @@ Snapshot decode_snapshot(std::span<const std::uint8_t> bytes) {
                       s->frame_center()->Get(2)};
   out.frame.scale = s->frame_scale();
   decode_attribution(*s, m.vertex_count(), out);
+  out.chains.first = s->chains_first();
+  if (s->chains()) out.chains.chains.assign(s->chains()->begin(), s->chains()->end());
   return out;
 }
 

@@ -14,14 +14,24 @@
 
 namespace csculpt::peer {
 
+/// The hash chains of consecutive versions: chains[i] is the chain of version first + i.
+struct ChainHistory {
+  std::uint64_t first = 0;
+  std::vector<std::uint64_t> chains;
+};
+
 struct Snapshot {
   Mesh mesh;
   MergeFrame frame;
   std::map<PeerId, std::vector<float>> attribution;  ///< per peer, a value per vertex
+  /// The sender's latest chains, ending at the snapshot's version: where a receiver that held
+  /// another branch forked from it (Replication::fork_point).
+  ChainHistory chains;
 };
 
 std::vector<std::uint8_t> encode_snapshot(const Mesh& mesh, const MergeFrame& frame,
-                                          const std::map<PeerId, std::vector<float>>& attribution);
+                                          const std::map<PeerId, std::vector<float>>& attribution,
+                                          const ChainHistory& chains = {});
 /// Throws InvalidInput saying what is wrong: failed verification, a mesh that fails validate(),
 /// a missing frame or attribution of the wrong size.
 Snapshot decode_snapshot(std::span<const std::uint8_t> bytes);

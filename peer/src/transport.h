@@ -30,7 +30,8 @@ CurveKey curve_public(const CurveKey& secret);
 
 RoutingId routing_id(PeerId id);
 /// Whether `routing` (the first frame a ROUTER hands over) is `sender`'s routing id: a member
-/// cannot speak for another (a ROUTER refuses a second connection with an id in use).
+/// cannot speak for another by accident. (A newer connection with an id in use takes it over,
+/// ZMQ_ROUTER_HANDOVER: every member holds the session's keys and is trusted that far.)
 bool is_routing_id_of(PeerId sender, std::span<const std::uint8_t> routing);
 
 /// The answer to a ZAP request (RFC 27): accepted only for CURVE with the session's client key.
@@ -49,6 +50,9 @@ struct DealerOptions {
   const RoutingId* routing_id = nullptr;  ///< none: libzmq picks one
   std::int64_t max_message_bytes = -1;    ///< ZMQ_MAXMSGSIZE; -1 = unlimited
   int send_hwm = 1000;                    ///< messages queued before sends are dropped
+  /// ZMTP heartbeats (ZMQ_HEARTBEAT_IVL/TIMEOUT); 0: none. A connection silent for the timeout
+  /// is closed and made again.
+  std::chrono::milliseconds heartbeat{0}, heartbeat_timeout{0};
 };
 /// A connected CURVE DEALER (the hostile test client makes them with wrong keys too). Throws
 /// IoError.
@@ -66,9 +70,13 @@ class Transport {
  public:
   /// Binds the ROUTER to `bind` (port * picks a free one) with the invite's CURVE keys and
   /// starts answering ZAP requests; raises the process's open-file limit (raise_fd_limit).
-  /// Throws IoError naming the endpoint that failed.
+  /// Every connection, both ways, is pinged every `heartbeat` and closed (then made again)
+  /// when silent for `silence`: after a network partition the TCP connections are still
+  /// "established" while their retransmissions back off for seconds, and a fresh one heals
+  /// at once. Throws IoError naming the endpoint that failed.
   Transport(const Invite& invite, PeerId self, const std::string& bind,
-            std::size_t max_message_bytes);
+            std::size_t max_message_bytes, std::chrono::milliseconds heartbeat,
+            std::chrono::milliseconds silence);
   ~Transport();
   Transport(const Transport&) = delete;
   Transport& operator=(const Transport&) = delete;
@@ -118,6 +126,7 @@ class Transport {
   CurveKey server_public_{};  // every member's ROUTER has this key
   CurveKey client_public_{};  // the only client key ZAP admits
   std::size_t max_message_bytes_;
+  std::chrono::milliseconds heartbeat_, silence_;  // ZMTP liveness of every connection
   zmq::context_t context_{1};
   zmq::socket_t zap_;                        // inproc ZAP handler: bound before any CURVE socket
   zmq::socket_t router_;                     // where every peer's DEALER sends to us

@@ -41,6 +41,12 @@ class BadInput(unittest.TestCase):
         self.assertIn("cannot open " + path, result.stderr)
         self.assertEqual(saved, self.base)  # it carried on with the built-in sphere
 
+    def test_empty_or_overlong_name(self):
+        for name in ("", "x" * 64):
+            result = run_app("--name", name, check=False, timeout=30)
+            self.assertEqual(result.returncode, 2, result)
+            self.assertIn("--name needs a name of 1 to 63 bytes", result.stdout + result.stderr)
+
     def test_missing_mesh_file(self):
         result, saved = self.run_kept_alive("/nonexistent/mesh.obj")
         self.assertIn("cannot open /nonexistent/mesh.obj", result.stderr)

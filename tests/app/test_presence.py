@@ -1,7 +1,8 @@
 """Presence between two csculpt-app processes: the joiner moves its cursor over the mesh (no
 stroke) and the host receives its cursor through the session; the host's cursor stays off the
 mesh, and the joiner sees none. The exit line `SESSION ...` ends with presence=<peers whose
-cursor was seen over the mesh>: 1 at the host, 0 at the joiner.
+cursor was seen over the mesh>: 1 at the host, 0 at the joiner; and peers=<the others' names>,
+which each gave with --name.
 
 Xvfb's pointer starts at the screen's centre, over the sphere, and a window mapped under it
 takes that position: once the host's window is up the pointer is moved to a corner (xdotool),
@@ -32,7 +33,7 @@ class Presence(unittest.TestCase):
         replay = Replay().wait("session").wait(10)
         for x in range(600, 700, 10):
             replay.lines += [f"move {x} 400", "wait 6"]
-        host = subprocess.Popen([APP, *TEST_SPHERE, "--host", "--exit-after", "8"],
+        host = subprocess.Popen([APP, *TEST_SPHERE, "--host", "--name", "alice", "--exit-after", "8"],
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         self.addCleanup(lambda: host.poll() is None and host.kill())
         invite_line = host.stdout.readline().strip()
@@ -43,7 +44,7 @@ class Presence(unittest.TestCase):
         window = subprocess.run(["xdotool", "search", "--sync", "--name", "^cSculpt$"], check=True,
                                 capture_output=True, text=True).stdout.split()[0]
         subprocess.run(["xdotool", "mousemove", "--window", window, "1275", "795"], check=True)
-        joiner = subprocess.run([APP, "--join", invite_line.split(" ", 1)[1], "--replay",
+        joiner = subprocess.run([APP, "--join", invite_line.split(" ", 1)[1], "--name", "bob", "--replay",
                                  replay.write(directory), "--exit-after", "3"],
                                 capture_output=True, text=True, timeout=60)
         self.assertEqual(joiner.returncode, 0, joiner.stderr)
@@ -53,6 +54,8 @@ class Presence(unittest.TestCase):
         self.assertEqual(host_session["members"], "1", host_out)  # the joiner has left by then
         self.assertEqual(host_session["presence"], "1", host_out)
         self.assertEqual(session_line(joiner.stdout)["presence"], "0", joiner.stdout)
+        self.assertEqual(host_session["peers"], "bob", host_out)
+        self.assertEqual(session_line(joiner.stdout)["peers"], "alice", joiner.stdout)
 
 
 if __name__ == "__main__":

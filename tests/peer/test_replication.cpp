@@ -14,13 +14,16 @@ using namespace csculpt;
 using namespace csculpt::peer;
 using namespace csculpt::peer::testing;
 
-/// The versions a merger would publish: each a stroke from the one before, chained.
-std::vector<VersionRecord> history(std::size_t n) {
-  std::vector<VersionRecord> out;
+/// The versions a merger would publish: each a stroke from the one before, chained. With
+/// `prefix`, they follow its versions (another branch from its end, pushed by `push`).
+std::vector<VersionRecord> history(std::size_t n, std::vector<VersionRecord> prefix = {},
+                                   float push = 0.01f) {
+  std::vector<VersionRecord> out = prefix;
   Mesh base = sphere();
-  std::uint64_t chain = kGenesisChain;
-  for (std::size_t v = 1; v <= n; ++v) {
-    const Diff d = stroke_diff(base, {0.f, 0.f, 1.f}, {float(v) * 0.01f, 0.f, 0.f});
+  for (const VersionRecord& r : prefix) apply_diff(decode_diff(r.diff_bytes, base), base);
+  std::uint64_t chain = prefix.empty() ? kGenesisChain : prefix.back().chain;
+  for (std::size_t v = prefix.size() + 1; v <= prefix.size() + n; ++v) {
+    const Diff d = stroke_diff(base, {0.f, 0.f, 1.f}, {float(v) * push, 0.f, 0.f});
     DiffHeader h;
     h.base_version = v - 1;
     h.sequence = v;
@@ -64,8 +67,38 @@ TEST(Replication, AcceptsAChainAndConvergesOnTheMergersMesh) {
   EXPECT_EQ(r.chain(), h.back().chain);
   EXPECT_EQ(r.latest().version, 3u);
   EXPECT_EQ(r.chain_at(1).value_or(0), h[0].chain);
-  EXPECT_FALSE(r.chain_at(0).has_value());  // version 0 was never accepted, so not kept
+  EXPECT_EQ(r.chain_at(0).value_or(0), kGenesisChain);  // where the session started
   EXPECT_NE(mesh_digest(base), mesh_digest(sphere()));
+}
+
+// After a partition each side merged its own versions from a common one: a snapshot's chains
+// tell the receiver where (the versions its own branch had since are carried over from there).
+TEST(Replication, FindsWhereTwoBranchesForked) {
+  const auto shared = history(2);
+  const auto a = history(4, shared, 0.01f), b = history(3, shared, -0.02f);
+  Replication ra = at_start(), rb = at_start();
+  Mesh base_a = sphere(), base_b = sphere();
+  for (const VersionRecord& v : a) ra.accept(v, base_a);
+  for (const VersionRecord& v : b) rb.accept(v, base_b);
+  ASSERT_NE(a[2].chain, b[2].chain);
+  EXPECT_EQ(ra.fork_point(rb.recent_chains(kChainsSent)), 2u);
+  EXPECT_EQ(rb.fork_point(ra.recent_chains(kChainsSent)), 2u);
+  // The same branch, one peer behind: the fork point is the version it holds.
+  Replication behind = at_start();
+  Mesh base = sphere();
+  for (std::size_t i = 0; i < 4; ++i) behind.accept(a[i], base);
+  EXPECT_EQ(behind.fork_point(ra.recent_chains(kChainsSent)), 4u);
+  // Chains that do not reach back to the fork: no common version known.
+  EXPECT_FALSE(ra.fork_point(rb.recent_chains(2)).has_value());
+  // A snapshot's chains become ours: the receiver can tell the next one where it forked.
+  Replication joined;
+  joined.reset(b.size(), b.back().chain, rb.recent_chains(kChainsSent));
+  EXPECT_EQ(joined.chain_at(1).value_or(0), b[0].chain);
+  EXPECT_EQ(joined.fork_point(ra.recent_chains(kChainsSent)), 2u);
+  // Chains that do not end at the snapshot's version are not believed.
+  Replication wrong;
+  wrong.reset(b.size(), b.back().chain ^ 1, rb.recent_chains(kChainsSent));
+  EXPECT_FALSE(wrong.chain_at(1).has_value());
 }
 
 TEST(Replication, RefusesABrokenChainOrAForeignBaseAndChangesNothing) {

@@ -190,6 +190,11 @@ TEST(Session, APositionOutOfTheSessionsReachIsRefusedWithTheBound) {
   Mesh painted = b.local;  // a channel value outside its range too
   painted.channels[0].values[5] = 3.f;
   EXPECT_THROW(b.session->submit(painted, 1), InvalidInput);
+  // Float rounding a hair past a bound (a brush's lerp, a rebase) is an edit as meant: refusing
+  // it stopped a simulated artist in a partition test.
+  Mesh rounded = b.local;
+  rounded.channels[0].values[5] = rounded.channels[0].desc.min_value - 4e-7f;
+  EXPECT_NO_THROW(b.session->submit(rounded, 0));
   // A legitimate long grab (ten diagonals) passes.
   b.local.positions[7].y += 10 * MergeFrame::fit(sphere.positions).scale;
   EXPECT_TRUE(b.session->submit(b.local, 1));

@@ -2,8 +2,9 @@
 """Durable sessions: three `csculpt peer` processes journal a session (compacting as they go),
 all three are SIGKILLed at once mid-editing, and all three restart with `--resume`: the same
 session comes back from the journals, the peers find each other on their old endpoints, and
-every version any peer held before the kill (acknowledged edits included) is in the history
-they reconverge on, mesh digest for mesh digest."""
+every version any peer held before the kill is in the history they reconverge on, mesh digest
+for mesh digest, and every marker (`--markers`: one vertex per stroke that only its peer
+paints) any peer saw acknowledged before the kill is in the final agreed mesh."""
 
 import os
 import shutil
@@ -18,6 +19,10 @@ from sessionlib import Peer, report, wait_all, wait_converged  # noqa: E402
 IDS = (1, 2, 3)
 # Small enough that the logs are compacted several times during the run.
 COMPACT = ["--journal-max-versions", "16"]
+
+
+def acknowledged_markers(peer):
+    return {v for line in peer.events("marker_acked") for v in line["vertices"]}
 
 
 def history(peer, since=0.0):
@@ -48,10 +53,12 @@ class Journal(unittest.TestCase):
         return os.path.join(self.dir, f"peer{i}")
 
     def run_until_acknowledged(self):
-        creator = self.start(1, seconds=120, extra=["--journal", self.journal(1)] + COMPACT)
+        creator = self.start(1, seconds=120,
+                             extra=["--journal", self.journal(1), "--markers"] + COMPACT)
         invite = creator.invite()
         peers = [creator] + [self.start(i, join=invite, seconds=120,
-                                        extra=["--journal", self.journal(i)] + COMPACT)
+                                        extra=["--journal", self.journal(i), "--markers"] +
+                                        COMPACT)
                              for i in IDS[1:]]
         for p in peers:
             p.wait_for(lambda p=p: p.state() and p.state()["members"] == 3, 30, "3 members")
@@ -70,6 +77,8 @@ class Journal(unittest.TestCase):
         for p in before:
             p.proc.wait(10)
         held = {p.peer_id: p.state() for p in before}
+        acked = set().union(*(acknowledged_markers(p) for p in before))
+        made = {p.peer_id: len(p.events("marker")) for p in before}
         agreed = {}
         for p in before:
             for v, digests in history(p).items():
@@ -79,7 +88,9 @@ class Journal(unittest.TestCase):
             self.assertEqual(len(digests), 1, f"version {v} had meshes {digests}")
 
         started = time.time()
-        after = [self.start(i, seconds=2, extra=["--resume", self.journal(i)]) for i in IDS]
+        # New markers numbered after the ones made before the kill.
+        after = [self.start(i, seconds=2, extra=["--resume", self.journal(i), "--markers",
+                                                 "--marker-first", str(made[i])]) for i in IDS]
         for p in after:
             inv = p.wait_for(lambda p=p: p.first("invite"), 30, "resumed invite")
             self.assertTrue(inv["resumed"])
@@ -109,7 +120,12 @@ class Journal(unittest.TestCase):
             self.assertEqual(s["lost_edits"], 0, s)
             self.assertEqual(s["digest"], result["digest"])
             self.assertEqual(s["snapshots_sent"], 0, f"a fork was repaired by snapshot: {s}")
-        report("journal resume", killed_versions=sorted(s["version"] for s in held.values()),
+            self.assertEqual(s["markers_lost"], 0, s)
+            missing = sorted(acked - set(s["marked"]))
+            self.assertEqual(missing, [], "markers acknowledged before the kill are not in the "
+                             f"agreed mesh of peer {p.peer_id}")
+        report("journal resume", markers_acknowledged_before_kill=len(acked),
+               killed_versions=sorted(s["version"] for s in held.values()),
                resumed_versions=[p.first("invite")["version"] for p in after],
                final_version=result["version"], resume_to_invite_s=round(resumed_s, 3),
                kill_to_converged_s=round(time.time() - killed_at, 3))

@@ -95,9 +95,17 @@ struct SessionStats {
   std::uint64_t submits = 0;
   std::uint64_t submit_bytes = 0;
   std::uint64_t strokes_submitted = 0;     ///< strokes the host reported
-  std::uint64_t strokes_acknowledged = 0;  ///< of those, seen inside a merged version
+  std::uint64_t strokes_acknowledged = 0;  ///< of those, in a version update() applied
   std::uint64_t versions_applied = 0;      ///< by update()
   std::uint64_t rebases = 0;               ///< updates that had local edits to carry over
+  /// Switches to another branch of the history (after a partition healed, the one this peer
+  /// followed lost): its versions since the fork were carried over as local edits and sent
+  /// again. Not in csc_session_stats.
+  std::uint64_t branch_rebases = 0;
+  /// Versions of a lost branch that could not be carried over (older than what the host keeps,
+  /// revert_log.h): their edits are gone. 0 unless a partition outlasted that history. Not in
+  /// csc_session_stats.
+  std::uint64_t branch_versions_dropped = 0;
   // this peer as the merger
   std::uint64_t merges = 0;
   std::uint64_t merged_strokes = 0;

@@ -1,0 +1,280 @@
+#!/usr/bin/env python3
+"""A Jepsen-style chaos run of a session: four `csculpt peer` processes, each in its own network
+namespace, sculpt and paint the whole time, each stroke with a marker (`--markers`), while a
+seeded random schedule injects faults one after another:
+
+- kill:      SIGKILL of a peer (the merger half of the time), restarted 1-4 s later as a new
+             peer that joins through a live one;
+- stall:     SIGSTOP of a peer (the merger half of the time) for 0.5-3 s, then SIGCONT;
+- partition: the peers split in two at random (the merger's side too), traffic between the
+             sides dropped with nft for 2-10 s, then healed.
+
+Then everything heals, editing stops, and the checker asks: one merger, one chain (version and
+digest) on every live peer, and every marker any peer (killed ones too) saw acknowledged,
+i.e. present in a version it followed, is present in the agreed mesh, read off its values.
+
+    chaos.py [--minutes M] [--seed S] [--faces F]     (exit 0: passed; 1: failed; 77: cannot run)
+
+`./dev chaos --minutes 30` is the long run; CTest runs a short one (session.chaos). Needs root,
+iproute2 and nftables."""
+
+import argparse
+import json
+import os
+import random
+import shutil
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from netns import Namespaces, why_not  # noqa: E402
+from sessionlib import CLI, Peer, wait_all  # noqa: E402
+
+SKIP = 77
+SUBNET = "192.168.253"
+PEERS = 4
+TIMING = ["--sync-ms", "50", "--heartbeat-ms", "100", "--evasive-ms", "400",
+          "--expired-ms", "1000", "--join-timeout-ms", "30000"]
+RATE = 2.0          # strokes (and markers) per second per peer
+MARKER_SLOTS = 16   # cli/markers.h kMarkerSlots
+MAX_INCARNATIONS = 64
+
+
+class Cluster:
+    """The peers by position 1..PEERS (each position's namespace), with every incarnation kept
+    for the checker."""
+
+    def __init__(self, nets, faces, edit_seconds):
+        self.nets = nets
+        self.faces = int(faces)
+        self.edit_seconds = edit_seconds
+        self.live = {}        # position -> Peer
+        self.everyone = []    # every incarnation, killed ones too
+        self.incarnations = 0
+        self.next_id = 1
+        # Each incarnation marks its own vertices: slot n % 16, a block of `limit` markers.
+        vertices = self.faces // 2
+        rows = (MAX_INCARNATIONS + MARKER_SLOTS - 1) // MARKER_SLOTS
+        self.marker_limit = vertices // MARKER_SLOTS // rows
+
+    def markers(self):
+        n = self.incarnations
+        self.incarnations += 1
+        if n >= MAX_INCARNATIONS:
+            raise RuntimeError("more incarnations than marker blocks")
+        return ["--markers", "--marker-slot", str(n % MARKER_SLOTS), "--marker-first",
+                str((n // MARKER_SLOTS) * self.marker_limit), "--marker-limit",
+                str(self.marker_limit)]
+
+    def start(self, position, invite=None):
+        port = 7300 + self.incarnations
+        extra = self.markers() + ["--bind", f"tcp://{self.nets.address(position)}:{port}"]
+        peer = Peer(self.next_id, join=invite, seconds=self.edit_seconds, rate=RATE,
+                    timing=TIMING, prefix=self.nets.prefix(position), faces=str(self.faces),
+                    extra=extra, linger=3600)
+        peer.position = position
+        self.next_id += 1
+        self.live[position] = peer
+        self.everyone.append(peer)
+        return peer
+
+    def invite(self):
+        """An invite through a live peer (its own endpoint)."""
+        for p in self.live.values():
+            line = p.first("invite")
+            if line and p.proc.poll() is None:
+                return line["invite"]
+        raise AssertionError("no live peer to join through")
+
+    def merger_position(self):
+        mergers = [p.state()["merger"] for p in self.live.values() if p.state()]
+        if not mergers:
+            return None
+        merger = max(set(mergers), key=mergers.count)
+        for pos, p in self.live.items():
+            if p.peer_id == merger:
+                return pos
+        return None
+
+
+def one_merger(cluster):
+    """Every live peer names the same live merger."""
+    states = [p.state() for p in cluster.live.values()]
+    if any(s is None for s in states):
+        return False
+    mergers = {s["merger"] for s in states}
+    ids = {p.peer_id for p in cluster.live.values()}
+    return len(mergers) == 1 and mergers <= ids and mergers
+
+
+def pick(rng, cluster):
+    """A peer to hit: the merger half of the time."""
+    merger = cluster.merger_position()
+    if merger is not None and rng.random() < 0.5:
+        return merger
+    return rng.choice(sorted(cluster.live))
+
+
+class Schedule:
+    def __init__(self, cluster, rng, log):
+        self.cluster = cluster
+        self.rng = rng
+        self.log = log
+        self.faults = {"kill": 0, "stall": 0, "partition": 0}
+
+    def kill(self):
+        c = self.cluster
+        # A kill while the last heal is still being merged could take the only copy of a
+        # branch with it (a double fault): wait for one merger first.
+        wait_all(lambda: one_merger(c), 30, "one merger before a kill", list(c.live.values()))
+        position = pick(self.rng, c)
+        victim = c.live.pop(position)
+        victim.kill()
+        self.log(f"kill peer {victim.peer_id} (position {position})")
+        time.sleep(self.rng.uniform(1, 4))
+        peer = c.start(position, c.invite())
+        peer.wait_for(lambda: peer.state() is not None, 60, "its first state")
+        self.log(f"restart at position {position} as peer {peer.peer_id}")
+
+    def stall(self):
+        position = pick(self.rng, self.cluster)
+        peer = self.cluster.live[position]
+        seconds = self.rng.uniform(0.5, 3)
+        peer.proc.send_signal(19)  # SIGSTOP
+        time.sleep(seconds)
+        peer.proc.send_signal(18)  # SIGCONT
+        self.log(f"stall peer {peer.peer_id} {seconds:.1f} s")
+
+    def partition(self):
+        positions = sorted(self.cluster.live)
+        self.rng.shuffle(positions)
+        cut = self.rng.randint(1, len(positions) - 1)
+        sides = [sorted(positions[:cut]), sorted(positions[cut:])]
+        seconds = self.rng.uniform(2, 10)
+        self.cluster.nets.partition(*sides)
+        time.sleep(seconds)
+        self.cluster.nets.heal()
+        self.log(f"partition {sides[0]} | {sides[1]} {seconds:.1f} s")
+
+    def run(self, until):
+        while time.time() < until:
+            kind = self.rng.choice(["kill", "stall", "partition"])
+            getattr(self, kind)()
+            self.faults[kind] += 1
+            time.sleep(self.rng.uniform(0.5, 3))
+
+
+def agreed(peers):
+    states = [p.state() for p in peers]
+    if any(s is None or s["editing"] for s in states):
+        return False
+    first = states[0]
+    return all(s["version"] == first["version"] and s["digest"] == first["digest"] and
+               s["base_digest"] == s["digest"] and s["unacknowledged"] == 0 and
+               s["merger"] == first["merger"] for s in states) and first
+
+
+def acknowledged(peer):
+    return {v for line in peer.events("marker_acked") for v in line["vertices"]}
+
+
+def check(cluster, log):
+    """The checker; returns the figures, raises AssertionError saying what failed."""
+    live = list(cluster.live.values())
+    for p in live:
+        p.quit()
+    summaries = [p.summary(60) for p in live]
+    digests = {s["digest"] for s in summaries}
+    versions = {s["version"] for s in summaries}
+    if len(digests) != 1 or len(versions) != 1:
+        raise AssertionError(f"more than one chain at the end: versions {versions}, "
+                             f"digests {digests}")
+    marked = set(summaries[0]["marked"])
+    lost = {p.peer_id: sorted(acknowledged(p) - marked) for p in cluster.everyone}
+    lost = {k: v for k, v in lost.items() if v}
+    made = sum(len(p.events("marker")) for p in cluster.everyone)
+    acked = sum(len(acknowledged(p)) for p in cluster.everyone)
+    unmerged = [s for s in summaries if s["markers_acknowledged"] != s["markers_made"]]
+    if lost:
+        raise AssertionError(f"acknowledged markers absent from the agreed mesh: {lost}")
+    if unmerged:
+        raise AssertionError(f"live peers with markers never merged: {unmerged}")
+    for p in cluster.everyone:
+        if p.proc.returncode not in (0, -9):
+            raise AssertionError(f"peer {p.peer_id} exited {p.proc.returncode}: {p.stderr}")
+    return {"markers_made": made, "markers_acknowledged": acked, "markers_lost": 0,
+            "version": summaries[0]["version"],
+            "branch_rebases": sum(s["branch_rebases"] for s in summaries),
+            "branch_versions_dropped": sum(s["branch_versions_dropped"] for s in summaries)}
+
+
+def run(minutes, seed, faces):
+    rng = random.Random(seed)
+    started = time.time()
+
+    def log(text):
+        print(f"[{time.time() - started:7.1f} s] {text}", flush=True)
+
+    nets = Namespaces(SUBNET)
+    cluster = None
+    try:
+        nets.build(PEERS)
+        cluster = Cluster(nets, faces, edit_seconds=minutes * 60 + 5)
+        creator = cluster.start(1)
+        invite = creator.invite()
+        for position in range(2, PEERS + 1):
+            cluster.start(position, invite)
+        peers = list(cluster.live.values())
+        wait_all(lambda: all(p.state() and p.state()["members"] == PEERS for p in peers), 60,
+                 "every peer joined", peers)
+        schedule = Schedule(cluster, rng, log)
+        schedule.run(started + minutes * 60)
+        nets.heal()
+        last_fault = time.time()
+        log(f"faults done: {schedule.faults}")
+        merged = wait_all(lambda: one_merger(cluster), 60, "one merger",
+                          list(cluster.live.values()))
+        one_merger_s = time.time() - last_fault
+        for p in cluster.live.values():  # stop editing: the chain can settle on one version
+            p.proc.stdin.write("stop-editing\n")
+            p.proc.stdin.flush()
+        settled = wait_all(lambda: agreed(list(cluster.live.values())), 120, "one chain",
+                           list(cluster.live.values()))
+        one_chain_s = time.time() - last_fault
+        figures = check(cluster, log)
+        figures.update({"seed": seed, "minutes": minutes, "faces": faces, "faults": schedule.faults,
+                        "incarnations": cluster.incarnations, "merger": sorted(merged)[0],
+                        "one_merger_after_last_fault_s": round(one_merger_s, 2),
+                        "one_chain_after_last_fault_s": round(one_chain_s, 2),
+                        "agreed_version": settled["version"]})
+        print(json.dumps({"chaos": figures}), flush=True)
+        return figures
+    finally:
+        if cluster:
+            for p in cluster.everyone:
+                p.stop()
+        nets.close()
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--minutes", type=float, default=2.0)
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--faces", type=int, default=20000)
+    args = parser.parse_args()
+    reason = why_not(nft=True)
+    if reason:
+        print(f"SKIP: {reason}", flush=True)
+        sys.exit(SKIP)
+    if not (os.path.exists(CLI) or shutil.which(CLI)):
+        print(f"csculpt not found at {CLI}", flush=True)
+        sys.exit(1)
+    try:
+        run(args.minutes, args.seed, args.faces)
+    except AssertionError as e:
+        print(f"FAILED: {e}", flush=True)
+        sys.exit(1)
+
+
+if __name__ == "__main__":
+    main()

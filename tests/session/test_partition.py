@@ -1,0 +1,143 @@
+#!/usr/bin/env python3
+"""Partitions of a session of four `csculpt peer` processes, each in its own network namespace;
+traffic between the two sides is dropped with nft (the TCP connections stay established, as
+across a real network split). Every peer makes a marker with each stroke (`--markers`), on
+both sides during the partition and after the heal; the checks read the markers in the agreed
+mesh itself:
+
+- both sides keep merging while apart, and the heal loses no acknowledged marker;
+- one chain and one digest after the heal, and after a SIGKILL of the merger that follows it;
+- once healed, membership stays put (nobody is seen to leave or go evasive).
+
+Needs root, iproute2 and nftables; otherwise exits 77 (a CTest skip) saying what is missing."""
+
+import os
+import shutil
+import sys
+import time
+import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from netns import Namespaces, why_not  # noqa: E402
+from sessionlib import CLI, Peer, report, wait_all  # noqa: E402
+
+SKIP = 77
+SUBNET = "192.168.252"
+TIMING = ["--sync-ms", "50", "--heartbeat-ms", "100", "--evasive-ms", "400",
+          "--expired-ms", "1000", "--join-timeout-ms", "30000"]
+FACES = "20000"
+
+
+def start(nets, n, seconds, rate=4.0):
+    creator = Peer(1, seconds=seconds, rate=rate, timing=TIMING, prefix=nets.prefix(1),
+                   faces=FACES, extra=["--markers", "--bind", f"tcp://{nets.address(1)}:7200"])
+    peers = [creator]
+    invite = creator.invite()
+    for i in range(2, n + 1):
+        peers.append(Peer(i, join=invite, seconds=seconds, rate=rate, timing=TIMING,
+                          prefix=nets.prefix(i),
+                          extra=["--markers", "--bind", f"tcp://{nets.address(i)}:7200"]))
+    for p in peers:
+        p.wait_for(lambda p=p: p.state() and p.state()["members"] == n, 60, f"{n} members")
+    return peers
+
+
+def agreed(peers):
+    """Every peer done editing, on one version and digest, its mesh the agreed one."""
+    states = [p.state() for p in peers]
+    if any(s is None or s["editing"] for s in states):
+        return False
+    first = states[0]
+    return all(s["version"] == first["version"] and s["digest"] == first["digest"] and
+               s["base_digest"] == s["digest"] and s["unacknowledged"] == 0 and
+               s["merger"] == first["merger"] for s in states) and first
+
+
+def acknowledged_markers(peer):
+    return {v for line in peer.events("marker_acked") for v in line["vertices"]}
+
+
+def check_markers(testcase, survivors, everyone):
+    """Quits the survivors; every marker anyone saw acknowledged is in the agreed mesh."""
+    for p in survivors:
+        p.quit()
+    summaries = [p.summary() for p in survivors]
+    marked = set(summaries[0]["marked"])
+    for s in summaries:
+        testcase.assertEqual(s["digest"], summaries[0]["digest"])
+        testcase.assertEqual(set(s["marked"]), marked)
+        testcase.assertEqual(s["markers_lost"], 0, s)
+        testcase.assertEqual(s["markers_acknowledged"], s["markers_made"], s)
+    lost = {p.peer_id: sorted(acknowledged_markers(p) - marked) for p in everyone}
+    testcase.assertEqual({k: v for k, v in lost.items() if v}, {},
+                         "acknowledged markers absent from the agreed mesh")
+    return summaries, sum(len(acknowledged_markers(p)) for p in everyone)
+
+
+def membership_changes(peers, since):
+    return [(p.peer_id, e["event"], e.get("peer")) for p in peers
+            for e in p.lines if e.get("event") in ("peer_left", "peer_evasive", "peer_joined")
+            and e["_read_at"] >= since]
+
+
+class Partition(unittest.TestCase):
+    def run_partition(self, apart_s, kill_merger_after_s=None):
+        nets = Namespaces(SUBNET)
+        peers = []
+        try:
+            nets.build(4)
+            peers = start(nets, 4, seconds=apart_s + 14)
+            time.sleep(2)  # edits merged by everyone first
+            nets.partition([1, 2], [3, 4])
+            cut = time.time()
+            time.sleep(apart_s)
+            # Both sides merged while apart: each side's versions went on.
+            versions = {p.peer_id: p.state()["version"] for p in peers}
+            mergers = {p.peer_id: p.state()["merger"] for p in peers}
+            nets.heal()
+            healed = time.time()
+            survivors = peers
+            if kill_merger_after_s is not None:
+                time.sleep(kill_merger_after_s)
+                merger = peers[0].state()["merger"]
+                victim = next(p for p in peers if p.peer_id == merger)
+                victim.kill()
+                survivors = [p for p in peers if p is not victim]
+            settled = wait_all(lambda: agreed(survivors), 90, "one chain and digest", survivors)
+            stable_from = time.time()
+            time.sleep(3)
+            changes = membership_changes(survivors, stable_from)
+            self.assertEqual(changes, [], "membership changed on a healthy network")
+            self.assertTrue(agreed(survivors))
+            summaries, acked = check_markers(self, survivors, peers)
+            report("partition", apart_s=apart_s, versions_at_heal=versions,
+                   mergers_while_apart=mergers, version=settled["version"],
+                   markers_acknowledged=acked, markers_lost=0,
+                   settled_after_heal_s=round(stable_from - healed, 2),
+                   partition_s=round(healed - cut, 2))
+            self.assertNotEqual(mergers[1], mergers[3], "each side merged on its own")
+        finally:
+            for p in peers:
+                p.stop()
+            nets.close()
+
+    def test_heal_loses_no_acknowledged_marker(self):
+        self.run_partition(8)
+
+    def test_merger_killed_after_a_heal_leaves_one_chain(self):
+        self.run_partition(8, kill_merger_after_s=10)
+
+
+def main():
+    reason = why_not(nft=True)
+    if reason:
+        print(f"SKIP: {reason}", flush=True)
+        sys.exit(SKIP)
+    if not (os.path.exists(CLI) or shutil.which(CLI)):
+        print(f"csculpt not found at {CLI}", flush=True)
+        sys.exit(1)
+    unittest.main()
+
+
+if __name__ == "__main__":
+    main()
