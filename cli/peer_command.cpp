@@ -13,11 +13,11 @@
 #include <thread>
 
 #include "artist.h"
-#include "markers.h"
 #include "csculpt/error.h"
 #include "csculpt/io.h"
 #include "csculpt/peer/session.h"
 #include "csculpt/testkit/generate.h"
+#include "markers.h"
 
 namespace csculpt::cli {
 namespace {
@@ -341,8 +341,7 @@ void print_summary(const peer::Session& session, const Mesh& local, std::uint32_
         .num("markers_acknowledged", markers->acknowledged())
         .num("markers_lost", markers->lost(session.base()).size())
         .raw("marked", json_list(MarkerPainter::present(session.base())));
-  line
-      .num("id", session.id())
+  line.num("id", session.id())
       .raw("t", now_ms())
       .num("version", session.version())
       .raw("digest", hex64(peer::mesh_digest(local)))
@@ -479,7 +478,7 @@ int run_peer(const PeerCommandOptions& o) {
     std::optional<MarkerPainter> markers;
     if (o.markers)
       markers.emplace(static_cast<std::uint32_t>(o.marker_slot >= 0 ? std::uint64_t(o.marker_slot)
-                                                                     : session->id() % kMarkerSlots),
+                                                                    : session->id() % kMarkerSlots),
                       o.marker_first, o.marker_limit, session->base());
     const auto start = peer::Clock::now();
     edit_and_sync(o, *session, artist, markers ? &*markers : nullptr, start);
