@@ -9,9 +9,11 @@ seeded random schedule injects faults one after another:
 - partition: the peers split in two at random (the merger's side too), traffic between the
              sides dropped with nft for 2-10 s, then healed.
 
-Then everything heals, editing stops, and the checker asks: one merger, one chain (version and
-digest) on every live peer, and every marker any peer (killed ones too) saw acknowledged,
-i.e. present in a version it followed, is present in the agreed mesh, read off its values.
+The last fault is always a partition that cuts the merger off with one other peer. After it
+heals, the checker asks: one merger on every live peer within 5 s (while they still edit); then,
+editing stopped, one chain (version and digest) on every live peer, and every marker any peer
+(killed ones too) saw acknowledged, i.e. present in a version it followed, is present in the
+agreed mesh, read off its values.
 
     chaos.py [--minutes M] [--seed S] [--faces F]     (exit 0: passed; 1: failed; 77: cannot run)
 
@@ -145,11 +147,12 @@ class Schedule:
         peer.proc.send_signal(18)  # SIGCONT
         self.log(f"stall peer {peer.peer_id} {seconds:.1f} s")
 
-    def partition(self):
-        positions = sorted(self.cluster.live)
-        self.rng.shuffle(positions)
-        cut = self.rng.randint(1, len(positions) - 1)
-        sides = [sorted(positions[:cut]), sorted(positions[cut:])]
+    def partition(self, sides=None):
+        if sides is None:
+            positions = sorted(self.cluster.live)
+            self.rng.shuffle(positions)
+            cut = self.rng.randint(1, len(positions) - 1)
+            sides = [sorted(positions[:cut]), sorted(positions[cut:])]
         seconds = self.rng.uniform(2, 10)
         self.cluster.nets.partition(*sides)
         time.sleep(seconds)
@@ -162,6 +165,12 @@ class Schedule:
             getattr(self, kind)()
             self.faults[kind] += 1
             time.sleep(self.rng.uniform(0.5, 3))
+        # The last fault: the merger and one other cut off from the rest.
+        merger = self.cluster.merger_position() or 1
+        others = [p for p in sorted(self.cluster.live) if p != merger]
+        self.rng.shuffle(others)
+        self.partition([sorted([merger, others[0]]), sorted(others[1:])])
+        self.faults["partition"] += 1
 
 
 def agreed(peers):
@@ -235,6 +244,8 @@ def run(minutes, seed, faces):
         merged = wait_all(lambda: one_merger(cluster), 60, "one merger",
                           list(cluster.live.values()))
         one_merger_s = time.time() - last_fault
+        if one_merger_s > 5:
+            raise AssertionError(f"one merger only {one_merger_s:.1f} s after the last fault")
         for p in cluster.live.values():  # stop editing: the chain can settle on one version
             p.proc.stdin.write("stop-editing\n")
             p.proc.stdin.flush()
