@@ -24,15 +24,13 @@ import argparse
 import json
 import os
 import random
-import shutil
 import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from netns import Namespaces, why_not  # noqa: E402
-from sessionlib import CLI, Peer, wait_all  # noqa: E402
+from netns import Namespaces, exit_unless_possible  # noqa: E402
+from sessionlib import CLI, Peer, acknowledged_markers, converged, wait_all  # noqa: E402
 
-SKIP = 77
 SUBNET = "192.168.253"
 PEERS = 4
 TIMING = ["--sync-ms", "50", "--heartbeat-ms", "100", "--evasive-ms", "400",
@@ -173,20 +171,6 @@ class Schedule:
         self.faults["partition"] += 1
 
 
-def agreed(peers):
-    states = [p.state() for p in peers]
-    if any(s is None or s["editing"] for s in states):
-        return False
-    first = states[0]
-    return all(s["version"] == first["version"] and s["digest"] == first["digest"] and
-               s["base_digest"] == s["digest"] and s["unacknowledged"] == 0 and
-               s["merger"] == first["merger"] for s in states) and first
-
-
-def acknowledged(peer):
-    return {v for line in peer.events("marker_acked") for v in line["vertices"]}
-
-
 def check(cluster, log):
     """The checker; returns the figures, raises AssertionError saying what failed."""
     live = list(cluster.live.values())
@@ -199,10 +183,10 @@ def check(cluster, log):
         raise AssertionError(f"more than one chain at the end: versions {versions}, "
                              f"digests {digests}")
     marked = set(summaries[0]["marked"])
-    lost = {p.peer_id: sorted(acknowledged(p) - marked) for p in cluster.everyone}
+    lost = {p.peer_id: sorted(acknowledged_markers(p) - marked) for p in cluster.everyone}
     lost = {k: v for k, v in lost.items() if v}
     made = sum(len(p.events("marker")) for p in cluster.everyone)
-    acked = sum(len(acknowledged(p)) for p in cluster.everyone)
+    acked = sum(len(acknowledged_markers(p)) for p in cluster.everyone)
     unmerged = [s for s in summaries if s["markers_acknowledged"] != s["markers_made"]]
     if lost:
         raise AssertionError(f"acknowledged markers absent from the agreed mesh: {lost}")
@@ -249,7 +233,7 @@ def run(minutes, seed, faces):
         for p in cluster.live.values():  # stop editing: the chain can settle on one version
             p.proc.stdin.write("stop-editing\n")
             p.proc.stdin.flush()
-        settled = wait_all(lambda: agreed(list(cluster.live.values())), 120, "one chain",
+        settled = wait_all(lambda: converged(list(cluster.live.values())), 120, "one chain",
                            list(cluster.live.values()))
         one_chain_s = time.time() - last_fault
         figures = check(cluster, log)
@@ -273,13 +257,7 @@ def main():
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--faces", type=int, default=20000)
     args = parser.parse_args()
-    reason = why_not(nft=True)
-    if reason:
-        print(f"SKIP: {reason}", flush=True)
-        sys.exit(SKIP)
-    if not (os.path.exists(CLI) or shutil.which(CLI)):
-        print(f"csculpt not found at {CLI}", flush=True)
-        sys.exit(1)
+    exit_unless_possible(CLI, nft=True)
     try:
         run(args.minutes, args.seed, args.faces)
     except AssertionError as e:
