@@ -8,7 +8,10 @@ exit 77, a CTest skip). Every namespace made is deleted by close(), whatever hap
 import os
 import shutil
 import subprocess
+import sys
 import uuid
+
+SKIP = 77  # CTest's skip code for these tests (SKIP_RETURN_CODE)
 
 
 def run(*args, check=True, stdin=None):
@@ -93,6 +96,18 @@ class Namespaces:
         for name in reversed(self.made):
             run("ip", "netns", "del", name, check=False)
         self.made = []
+
+
+def exit_unless_possible(cli, **needs):
+    """Exits 77 saying why when namespaces with `needs` (why_not's arguments) cannot be made
+    here, and 1 when `cli` (the csculpt binary) is missing."""
+    reason = why_not(**needs)
+    if reason:
+        print(f"SKIP: {reason}", flush=True)
+        sys.exit(SKIP)
+    if not (os.path.exists(cli) or shutil.which(cli)):
+        print(f"csculpt not found at {cli}", flush=True)
+        sys.exit(1)
 
 
 def why_not(tools=("ip",), netem=None, nft=False):

@@ -152,18 +152,25 @@ def wait_all(predicate, timeout, what, peers):
 
 
 def converged(peers, require_acknowledged=True):
-    """Every peer done editing, on the same version and mesh digest, with nothing unmerged
-    (its mesh is the agreed version's) and, unless told otherwise, every stroke acknowledged."""
+    """Every peer done editing, following one merger, on the same version and mesh digest, with
+    nothing unmerged (its mesh is the agreed version's) and, unless told otherwise, every stroke
+    acknowledged."""
     states = [p.state() for p in peers]
     if any(s is None for s in states):
         return False
-    v, d = states[0]["version"], states[0]["digest"]
+    v, d, m = states[0]["version"], states[0]["digest"], states[0]["merger"]
     for s in states:
-        if s["editing"] or s["version"] != v or s["digest"] != d or s["base_digest"] != d:
+        if (s["editing"] or s["version"] != v or s["digest"] != d or s["base_digest"] != d or
+                s["merger"] != m):
             return False
         if require_acknowledged and s["unacknowledged"] != 0:
             return False
     return {"version": v, "digest": d}
+
+
+def acknowledged_markers(peer):
+    """The markers (`--markers`) a peer saw in versions it applied."""
+    return {v for line in peer.events("marker_acked") for v in line["vertices"]}
 
 
 def wait_converged(testcase, peers, timeout=60):

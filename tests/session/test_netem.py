@@ -11,15 +11,13 @@ CSCULPT_NETEM_OPTIONAL=1 runs the same topology without netem where netem is mis
 the namespace plumbing on such a machine)."""
 
 import os
-import shutil
 import sys
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from netns import Namespaces, why_not  # noqa: E402
+from netns import SKIP, Namespaces, exit_unless_possible, why_not  # noqa: E402
 from sessionlib import CLI, Peer, finish, report, wait_converged  # noqa: E402
 
-SKIP = 77
 SUBNET = "192.168.251"
 NETEM = ["delay", "200ms", "loss", "5%"]
 # Thresholds for a 400 ms round trip with TCP retransmissions after losses (a lost SYN waits 1 s).
@@ -69,9 +67,7 @@ def main():
             sys.exit(SKIP)
         print(f"netem missing ({reason}): running the namespaces without it", flush=True)
         Netem.netem = False
-    if not (os.path.exists(CLI) or shutil.which(CLI)):
-        print(f"csculpt not found at {CLI}", flush=True)
-        sys.exit(1)
+    exit_unless_possible(CLI)  # the namespaces alone (without netem) are possible, checked above
     unittest.main()
 
 
