@@ -14,15 +14,12 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from sessionlib import Peer, report, wait_all, wait_converged  # noqa: E402
+from sessionlib import (Peer, acknowledged_markers, report, wait_all,  # noqa: E402
+                        wait_converged)
 
 IDS = (1, 2, 3)
 # Small enough that the logs are compacted several times during the run.
 COMPACT = ["--journal-max-versions", "16"]
-
-
-def acknowledged_markers(peer):
-    return {v for line in peer.events("marker_acked") for v in line["vertices"]}
 
 
 def history(peer, since=0.0):
