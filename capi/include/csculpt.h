@@ -56,11 +56,11 @@ extern "C" {
 /* ---- Version ------------------------------------------------------------------------------ */
 
 #define CSC_VERSION_MAJOR 0
-#define CSC_VERSION_MINOR 3
+#define CSC_VERSION_MINOR 4
 #define CSC_VERSION_PATCH 0
 /** MAJOR * 10000 + MINOR * 100 + PATCH, as csc_version() returns it. */
 #define CSC_VERSION_NUMBER (CSC_VERSION_MAJOR * 10000 + CSC_VERSION_MINOR * 100 + CSC_VERSION_PATCH)
-#define CSC_VERSION_STRING "0.3.0"
+#define CSC_VERSION_STRING "0.4.0"
 
 /** The version of the library actually loaded (compare with CSC_VERSION_NUMBER: a host built
  *  against MAJOR.MINOR runs with any library of the same MAJOR and a MINOR at least as high).
@@ -497,6 +497,20 @@ CSC_API csc_status csc_session_copy_base(csc_mesh** out, const csc_session* sess
  *  way (O(vertices)). */
 CSC_API csc_status csc_session_submit(csc_session* session, const csc_vertex_arrays* local,
                                       uint32_t strokes, int32_t* sent);
+
+/** csc_session_submit at the cost of the changed vertices instead of the whole mesh (since
+ *  0.4): `changed` lists the `count` vertices the host changed since its last submit of either
+ *  kind, updates in between included (any order, repeats allowed, listing a vertex too many
+ *  costs a little and nothing else; may be NULL when count is 0). What csc_session_undo and
+ *  csc_session_redo write need not be listed. The session keeps the vertices
+ *  where the host's arrays differ from the agreed version and captures, copies and sends over
+ *  those and the listed ones only; the edit sent is the one csc_session_submit would send when
+ *  every change is listed. A change of a vertex that is not listed is not sent until a later
+ *  call lists it (or a csc_session_submit). Fails with CSC_ERROR_INVALID_INPUT naming an index
+ *  out of range (nothing is sent or written). */
+CSC_API csc_status csc_session_submit_changed(csc_session* session, const csc_vertex_arrays* local,
+                                              const uint32_t* changed, uint32_t count,
+                                              uint32_t strokes, int32_t* sent);
 
 /** Applies the merged versions received so far and rebases `local` onto them (written in
  *  place). A submitted edit that a version did not include (it reached the merger after the
