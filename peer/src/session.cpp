@@ -101,10 +101,9 @@ struct Session::Impl {
     return equals_base_plus(base, submitted.empty() ? nullptr : &submitted.rbegin()->second, local);
   }
   /// Undo and redo write the host's mesh: what they `changed` joins the touched vertices.
-  bool written(bool did, std::span<const std::uint32_t> changed) {
+  void written(std::span<const std::uint32_t> changed) {
     gather(changed, "undo");
     touched = candidates;
-    return did;
   }
   void apply_snapshot(const HostItem& item, Mesh& local);
   /// Applies a merged version; true if an edit we submitted was left out of it (resend).
@@ -337,13 +336,17 @@ void Session::record_stroke(const Mesh& local, std::span<const std::uint32_t> ve
 bool Session::undo(Mesh& local, std::vector<std::uint32_t>& changed) {
   Impl& s = *impl_;
   s.ready_for(local, "undo");
-  return s.written(s.undo.undo(local, *s.merger, s.frame, changed), changed);
+  const bool did = s.undo.undo(local, *s.merger, s.frame, changed);
+  s.written(changed);
+  return did;
 }
 
 bool Session::redo(Mesh& local, std::vector<std::uint32_t>& changed) {
   Impl& s = *impl_;
   s.ready_for(local, "redo");
-  return s.written(s.undo.redo(local, *s.merger, s.frame, changed), changed);
+  const bool did = s.undo.redo(local, *s.merger, s.frame, changed);
+  s.written(changed);
+  return did;
 }
 
 std::size_t Session::undo_depth() const {

@@ -171,4 +171,27 @@ TEST(SessionChanged, AVertexChangedButNotListedArrivesOnceListed) {
   EXPECT_EQ(mesh_digest(a.local), mesh_digest(b.local));
 }
 
+TEST(SessionChanged, WhatUndoWroteIsSentWithoutBeingListed) {
+  const Mesh sphere = make_sphere(2000);
+  Host a{Session::create(sphere, fast_options(1)), sphere, true, {}};
+  Stroke grab;
+  grab.center = sphere.positions[0];
+  a.stroke(grab);
+  std::vector<std::uint32_t> vertices = a.changed;
+  std::vector<float> before;
+  for (const std::uint32_t v : vertices)
+    before.insert(before.end(),
+                  {sphere.positions[v].x, sphere.positions[v].y, sphere.positions[v].z});
+  a.session->record_stroke(a.local, vertices, before);
+  EXPECT_TRUE(a.submit(1));
+  a.update_to(1);
+  std::vector<std::uint32_t> undone;
+  ASSERT_TRUE(a.session->undo(a.local, undone));
+  EXPECT_FALSE(undone.empty());
+  EXPECT_TRUE(a.submit(1));  // nothing listed
+  a.update_to(2);
+  EXPECT_EQ(mesh_digest(a.local), mesh_digest(a.session->base()));
+  EXPECT_NEAR(a.session->base().positions[0].z, sphere.positions[0].z, 1e-4f);
+}
+
 }  // namespace
