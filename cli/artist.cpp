@@ -40,7 +40,7 @@ bool SimulatedArtist::stroke() {
   if (s.kind == Stroke::Kind::paint)
     for (const ChannelDesc& d : material_channels())
       if (local_.find_channel(d.name) < 0) return false;
-  apply_stroke(local_, s, &topology_);
+  apply_stroke(local_, s, &topology_, &changed_);
   ++strokes_;
   ++unsent_strokes_;
   return true;
@@ -63,9 +63,16 @@ std::size_t SimulatedArtist::step(peer::Clock::time_point now, bool editing) {
   }
   if (now >= next_submit_) {
     next_submit_ = now + options_.submit_every;
-    if (session_.submit(local_, unsent_strokes_)) unsent_strokes_ = 0;
+    if (submit(unsent_strokes_)) unsent_strokes_ = 0;
   }
   return applied;
+}
+
+bool SimulatedArtist::submit(std::uint32_t strokes) {
+  const bool sent = options_.whole_mesh_submit ? session_.submit(local_, strokes)
+                                               : session_.submit(local_, strokes, changed_);
+  changed_.clear();  // listed once: the session keeps what differs from its base
+  return sent;
 }
 
 std::uint64_t SimulatedArtist::unacknowledged() const {

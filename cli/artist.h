@@ -25,6 +25,9 @@ struct ArtistOptions {
   bool paint = true;
   /// How often the edit is submitted (the session's sync interval is a good choice).
   peer::Millis submit_every{250};
+  /// Submit the whole mesh (the session compares every vertex) rather than the vertices the
+  /// strokes changed: the safe default of hosts that do not track their changes.
+  bool whole_mesh_submit = false;
 };
 
 class SimulatedArtist {
@@ -41,6 +44,10 @@ class SimulatedArtist {
   /// mesh without the material channels).
   bool stroke();
 
+  /// Submits the edit (the changed vertices, or the whole mesh; see ArtistOptions) with
+  /// `strokes`; what Session::submit returns.
+  bool submit(std::uint32_t strokes);
+
   /// How many scripts the artist plays (1, or the number of replayed seeds).
   std::size_t scripts() const;
 
@@ -55,6 +62,7 @@ class SimulatedArtist {
   Mesh local_;
   Topology topology_;
   std::vector<Stroke> script_;
+  std::vector<std::uint32_t> changed_;  ///< vertices the strokes wrote since the last submit
   std::uint32_t strokes_ = 0, unsent_strokes_ = 0;
   std::size_t cursor_ = 0;  ///< next stroke of the script
   peer::Clock::time_point started_{}, next_submit_{};

@@ -14,6 +14,8 @@ struct BenchSessionOptions {
   std::uint32_t sync_ms = 50;
   std::uint32_t samples = 40;
   std::uint64_t seed = 11;
+  /// Hosts submit the whole mesh instead of the vertices their strokes changed.
+  bool full_submit = false;
 };
 
 CLI::App* add_bench_session_command(CLI::App& bench, BenchSessionOptions& options);

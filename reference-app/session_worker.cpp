@@ -272,6 +272,7 @@ void SessionWorker::apply_stroke(const Command& c) {
   if (csc_status s = csc_session_record_stroke(session_, &a, c.vertices.data(), count, recorded.data());
       s != CSC_OK)
     note(abi_error("cannot keep the stroke for undo", s));
+  unsent_vertices_.insert(unsent_vertices_.end(), c.vertices.begin(), c.vertices.end());
   ++strokes_unsent_;
 }
 
@@ -299,9 +300,15 @@ void SessionWorker::sync() {
   if (strokes_unsent_ > 0 || resubmit) {
     int32_t sent = 0;
     last_submit_ = std::chrono::steady_clock::now();
-    if (csc_status s = csc_session_submit(session_, &a, strokes_unsent_, &sent); s != CSC_OK)
+    // The strokes' vertices only: the session keeps what else differs from its version (what
+    // undo and redo wrote, what a rebase left), so a submit costs the stroke, not the mesh.
+    const auto count = static_cast<uint32_t>(unsent_vertices_.size());
+    if (csc_status s = csc_session_submit_changed(session_, &a, unsent_vertices_.data(), count,
+                                                  strokes_unsent_, &sent);
+        s != CSC_OK)
       note(abi_error("cannot send the stroke", s));
     strokes_unsent_ = 0;
+    unsent_vertices_.clear();
     dirty_ = true;  // submit sets the values to what the peers receive
     refresh_view();  // the counters the resubmission above reads
   }

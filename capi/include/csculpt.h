@@ -514,6 +514,21 @@ CSC_API csc_status csc_session_copy_base(csc_mesh** out, const csc_session* sess
 CSC_API csc_status csc_session_submit(csc_session* session, const csc_vertex_arrays* local,
                                       uint32_t strokes, int32_t* sent);
 
+/** csc_session_submit at the cost of the changed vertices instead of the whole mesh (since
+ *  0.4): `changed` lists the `count` vertices the host changed since its last submit of either
+ *  kind, updates in between included (any order, repeats allowed, listing a vertex too many
+ *  costs a little and nothing else; may be NULL when count is 0). What csc_session_undo and
+ *  csc_session_redo write need not be listed. The session keeps the vertices
+ *  where the host's arrays differ from the agreed version and captures, copies and sends over
+ *  those and the listed ones only; the edit sent is the one csc_session_submit would send when
+ *  every change is listed. A change of a vertex that is not listed is not sent until a later
+ *  call lists it, a csc_session_submit sends it, or a csc_session_update that applies a
+ *  version finds it (it compares the whole arrays). Fails with CSC_ERROR_INVALID_INPUT naming
+ *  an index out of range (nothing is sent or written). */
+CSC_API csc_status csc_session_submit_changed(csc_session* session, const csc_vertex_arrays* local,
+                                              const uint32_t* changed, uint32_t count,
+                                              uint32_t strokes, int32_t* sent);
+
 /** Applies the merged versions received so far and rebases `local` onto them (written in
  *  place). A submitted edit that a version did not include (it reached the merger after the
  *  merge) is sent again at once. `*applied` (may be NULL) is the number of versions applied. */

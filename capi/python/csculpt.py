@@ -388,6 +388,8 @@ PROTOTYPES = {
     "csc_session_copy_base": (_STATUS, [POINTER(_MeshP), _SessionP]),
     "csc_session_submit": (_STATUS, [_SessionP, POINTER(csc_vertex_arrays), c_uint32,
                                      POINTER(c_int32)]),
+    "csc_session_submit_changed": (_STATUS, [_SessionP, POINTER(csc_vertex_arrays), _U32P,
+                                             c_uint32, c_uint32, POINTER(c_int32)]),
     "csc_session_update": (_STATUS, [_SessionP, POINTER(csc_vertex_arrays), _U32P]),
     "csc_session_record_stroke": (_STATUS, [_SessionP, POINTER(csc_vertex_arrays), _U32P,
                                             c_uint32, _FloatP]),
@@ -1213,6 +1215,12 @@ def _session_options(options: Mapping[str, object]) -> csc_session_options:
     return o
 
 
+def _check_strokes(strokes) -> None:
+    if isinstance(strokes, bool) or int(strokes) != strokes or not 0 <= strokes < 2**32:
+        raise InvalidArgument(f"csculpt: strokes must be an integer in 0..2^32-1 "
+                              f"(got {strokes!r})")
+
+
 @dataclasses.dataclass(frozen=True)
 class SessionEvent:
     """What happened in a session (csc_session_event). kind is an EventKind (a plain int for a
@@ -1389,12 +1397,24 @@ class Session(_Handle):
         sent before for this version; `strokes` counts strokes made since the last submit that
         returned True. Changed values are rewritten in place to what the peers receive (within
         the wire tolerance). Returns False when there was nothing new to send."""
-        if isinstance(strokes, bool) or int(strokes) != strokes or not 0 <= strokes < 2**32:
-            raise InvalidArgument(f"csculpt: strokes must be an integer in 0..2^32-1 "
-                                  f"(got {strokes!r})")
+        _check_strokes(strokes)
         ptr, arrays, keep = self._arrays(positions, channels)
         sent = c_int32()
         _lib.csc_session_submit(ptr, ctypes.byref(arrays), strokes, ctypes.byref(sent))
+        del keep
+        return bool(sent.value)
+
+    def submit_changed(self, positions, changed, channels=None, strokes: int = 0) -> bool:
+        """submit() at the cost of the changed vertices: `changed` lists the vertices the host
+        changed since its last submit of either kind (any order, repeats allowed). A vertex
+        changed but not listed is not sent until a later call lists it. Raises InvalidInput
+        naming an index out of range (nothing sent or written)."""
+        _check_strokes(strokes)
+        ptr, arrays, keep = self._arrays(positions, channels)
+        indices = np.ascontiguousarray(changed, dtype=np.uint32).ravel()
+        sent = c_int32()
+        _lib.csc_session_submit_changed(ptr, ctypes.byref(arrays), indices.ctypes.data_as(_U32P),
+                                        indices.size, strokes, ctypes.byref(sent))
         del keep
         return bool(sent.value)
 

@@ -68,6 +68,7 @@ struct csc_session {
   std::string event_message;  // of the last polled event
   std::vector<csculpt::peer::Event> pending_events;
   std::vector<std::uint32_t> changed;  // of the last undo or redo
+  std::vector<std::uint32_t> synced;   // scratch: the vertices a changed-only submit copies
   // the snapshots csc_session_presence_count and csc_session_peer_count took
   std::vector<csculpt::peer::PeerPresence> presence;
   std::vector<csculpt::peer::PeerInfo> peers;
@@ -196,5 +197,10 @@ csc_session& live_session(csc_session* s);
 void copy_in(const csc_vertex_arrays& a, Mesh& m);
 /// The mirror -> host arrays (channels given as NULL are not written).
 void copy_out(const Mesh& m, const csc_vertex_arrays& a);
+/// The same for the listed vertices only; indices out of range are skipped (the session
+/// refuses them with its own message).
+void copy_in_at(const csc_vertex_arrays& a, std::span<const std::uint32_t> vertices, Mesh& m);
+void copy_out_at(const Mesh& m, std::span<const std::uint32_t> vertices,
+                 const csc_vertex_arrays& a);
 
 }  // namespace csculpt::capi

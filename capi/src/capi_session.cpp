@@ -73,6 +73,34 @@ void copy_out(const csculpt::Mesh& m, const csc_vertex_arrays& a) {
                   m.channels[c].values.size() * sizeof(float));
 }
 
+void copy_in_at(const csc_vertex_arrays& a, std::span<const std::uint32_t> vertices,
+                csculpt::Mesh& m) {
+  const std::size_t n = m.positions.size();
+  for (const std::uint32_t v : vertices) {
+    if (v >= n) continue;
+    std::memcpy(static_cast<void*>(&m.positions[v]), a.positions + std::size_t{v} * 3, 12);
+    for (std::size_t c = 0; c < m.channels.size(); ++c)
+      if (a.channels[c] != nullptr) {
+        const std::size_t w = m.channels[c].desc.width;
+        std::memcpy(m.channels[c].values.data() + v * w, a.channels[c] + v * w, w * 4);
+      }
+  }
+}
+
+void copy_out_at(const csculpt::Mesh& m, std::span<const std::uint32_t> vertices,
+                 const csc_vertex_arrays& a) {
+  const std::size_t n = m.positions.size();
+  for (const std::uint32_t v : vertices) {
+    if (v >= n) continue;
+    std::memcpy(a.positions + std::size_t{v} * 3, &m.positions[v], 12);
+    for (std::size_t c = 0; c < m.channels.size(); ++c)
+      if (a.channels[c] != nullptr) {
+        const std::size_t w = m.channels[c].desc.width;
+        std::memcpy(a.channels[c] + v * w, m.channels[c].values.data() + v * w, w * 4);
+      }
+  }
+}
+
 }  // namespace csculpt::capi
 
 extern "C" {
@@ -163,6 +191,27 @@ CSC_API csc_status csc_session_submit(csc_session* session, const csc_vertex_arr
     // Bad host values (NaN/Inf) are refused before anything is sent or written back.
     const bool did = h.session->submit(h.local, strokes);
     copy_out(h.local, a);
+    if (sent) *sent = did ? 1 : 0;
+  });
+}
+
+CSC_API csc_status csc_session_submit_changed(csc_session* session, const csc_vertex_arrays* local,
+                                              const uint32_t* changed, uint32_t count,
+                                              uint32_t strokes, int32_t* sent) {
+  return guarded("csc_session_submit_changed", [&] {
+    csc_session& h = live_session(session);
+    const csc_vertex_arrays a = host_arrays(local, h.local, "local");
+    if (count > 0) require_pointer(changed, "changed");
+    const std::span<const std::uint32_t> listed(changed, count);
+    // The session may write the vertices it holds as touched and the listed ones: both are
+    // copied in (the host's current values) and, once sent, out.
+    const std::span<const std::uint32_t> touched = h.session->touched();
+    h.synced.assign(touched.begin(), touched.end());
+    h.synced.insert(h.synced.end(), listed.begin(), listed.end());
+    copy_in_at(a, h.synced, h.local);
+    // Bad host values (NaN/Inf) and indices out of range are refused before anything is sent.
+    const bool did = h.session->submit(h.local, strokes, listed);
+    if (did) copy_out_at(h.local, h.synced, a);
     if (sent) *sent = did ? 1 : 0;
   });
 }

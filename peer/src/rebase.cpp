@@ -69,11 +69,11 @@ void restore(const Mesh& base, const Diff& d, Mesh& local) {
 }
 
 bool rebase_onto_version(Mesh& base, const Diff* ours, const Diff& merged, Mesh& local,
-                         Merger& merger, const MergeFrame& frame) {
+                         Merger& merger, const MergeFrame& frame, bool unedited) {
   const bool empty = local.positions.empty();
   if (!empty && !same_layout(base, local))
     throw InvalidInput("update: the local mesh's vertices or channels differ from the session's");
-  if (empty || equals_base_plus(base, ours, local)) {
+  if (empty || unedited || equals_base_plus(base, ours, local)) {
     // No edits since the submit (the common case): local = base + ours becomes the new
     // version sparsely: our submitted vertices back to the base, then the merged diff.
     if (!empty) {

@@ -21,9 +21,10 @@ void restore(const Mesh& base, const Diff& d, Mesh& local);
 /// peer submitted of the version (null if none of its submits is in): `local` edits beyond it
 /// are merged onto the new version, what it submitted is not applied twice. `local` empty
 /// becomes the new base. Returns true when there were such edits (a rebase). Throws
-/// InvalidInput when `local`'s layout is not `base`'s.
+/// InvalidInput when `local`'s layout is not `base`'s. `unedited`: the caller knows `local`
+/// equals `base` plus `ours` (the whole-mesh comparison is skipped).
 bool rebase_onto_version(Mesh& base, const Diff* ours, const Diff& merged, Mesh& local,
-                         Merger& merger, const MergeFrame& frame);
+                         Merger& merger, const MergeFrame& frame, bool unedited = false);
 
 /// Carries `local`'s edits (from `base`) over to `snapshot`, which becomes the base. Returns true
 /// when there were edits to carry (a rebase); `local` empty becomes the snapshot.

@@ -6,6 +6,7 @@
 #include <deque>
 #include <map>
 
+#include "attribution.h"
 #include "csculpt/diff.h"
 #include "csculpt/error.h"
 #include "csculpt/hash.h"
@@ -50,6 +51,15 @@ struct Session::Impl {
   std::uint64_t next_sequence = 1;
   /// The digest of the edit last sent: an unchanged edit is not sent again.
   std::uint64_t last_submit_digest = 0;
+  /// The vertices where the host's mesh may differ from the base, increasing: what the last
+  /// submit sent, what a rebase left, what undo and redo wrote. Submits with the host's changed
+  /// vertices capture over these and the changed ones only.
+  std::vector<std::uint32_t> touched;
+  /// Reused by those submits: a mark per vertex (all clear between calls), the vertices to
+  /// capture, and the capture.
+  std::vector<std::uint8_t> marked;
+  std::vector<std::uint32_t> candidates;
+  Diff captured;
   /// Strokes sent but not yet seen inside a merged version, and what each submit carried.
   std::uint32_t unacknowledged_strokes = 0;
   std::map<std::uint64_t, std::uint32_t> strokes_at;
@@ -82,6 +92,28 @@ struct Session::Impl {
     undo.set_tolerance(static_cast<float>(wire.position_tolerance * wire.position_scale),
                        static_cast<float>(wire.channel_tolerance));
   }
+  /// Sends `d` (the host's edit from the base, captured from `local`) unless it is empty or was
+  /// sent already; `local` then holds what the peers receive. False when nothing was sent.
+  bool send(const Diff& d, Mesh& local, std::uint32_t strokes);
+  /// touched + `changed` (any order, repeats allowed) into `candidates`, increasing. Throws
+  /// InvalidInput naming an index out of range before anything changes.
+  void gather(std::span<const std::uint32_t> changed, const char* call);
+  /// `touched` := where `local` differs from the base, among `among` (increasing).
+  void retouch(const Mesh& local, std::span<const std::uint32_t> among);
+  /// The same over every vertex (after a rebase, which is O(vertices) anyway).
+  void retouch_all(const Mesh& local) {
+    touched.clear();
+    if (!local.positions.empty()) touched = csculpt::peer::touched(capture_diff(base, local));
+  }
+  /// Whether `local` holds nothing but the base and the latest submit (no edit since).
+  bool holds_only_submitted(const Mesh& local) const {
+    return equals_base_plus(base, submitted.empty() ? nullptr : &submitted.rbegin()->second, local);
+  }
+  /// Undo and redo write the host's mesh: what they `changed` joins the touched vertices.
+  void written(std::span<const std::uint32_t> changed) {
+    gather(changed, "undo");
+    touched = candidates;
+  }
   void apply_snapshot(const HostItem& item, Mesh& local);
   /// Resume: applies the journaled versions the node handed over, with `own` (this peer's
   /// unmerged edit) put into `local` at its base version. True when `local` holds edits to send.
@@ -91,7 +123,8 @@ struct Session::Impl {
   /// we held another branch, so that branch's versions since are carried over, not dropped.
   Mesh fork_base(const HostItem& item);
   /// Applies a merged version; true if an edit we submitted was left out of it (resend).
-  bool apply_version(const HostItem& item, Mesh& local);
+  /// `unedited`: `local` is known to equal the base plus the latest submit.
+  bool apply_version(const HostItem& item, Mesh& local, bool unedited);
 };
 
 Session::Session(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -199,10 +232,11 @@ bool Session::Impl::replay_journal(const std::optional<OwnEdit>& own, Mesh& loca
   };
   restore_when_due();
   for (HostItem& item : node->host().take_items()) {
-    apply_version(item, local);
+    apply_version(item, local, /*unedited=*/false);
     ++versions_applied;
     restore_when_due();
   }
+  retouch_all(local);      // the restored edit differs from the base
   last_submit_digest = 0;  // what was sent before the restart is sent again
   const bool unmerged = !equals_base_plus(base, nullptr, local);
   // Counted from the restart on: the strokes still unacknowledged are submitted again.
@@ -232,34 +266,51 @@ bool Session::submit(Mesh& local, std::uint32_t strokes) {
   Impl& s = *impl_;
   if (s.left) throw InvalidInput("submit: the session was left");
   s.ready_for(local, "submit");
-  const Diff d = capture_diff(s.base, local);
-  check_diff_values(d, s.base, s.frame, "submit");  // the changed values: before anything is sent
+  return s.send(capture_diff(s.base, local), local, strokes);
+}
+
+bool Session::submit(Mesh& local, std::uint32_t strokes, std::span<const std::uint32_t> changed) {
+  Impl& s = *impl_;
+  if (s.left) throw InvalidInput("submit: the session was left");
+  s.ready_for(local, "submit");
+  s.gather(changed, "submit");
+  capture_diff_at(s.base, local, s.candidates, s.captured);
+  return s.send(s.captured, local, strokes);
+}
+
+std::span<const std::uint32_t> Session::touched() const {
+  return impl_->touched;
+}
+
+bool Session::Impl::send(const Diff& d, Mesh& local, std::uint32_t strokes) {
+  check_diff_values(d, base, frame, "submit");  // the changed values: before anything is sent
   if (d.positions.empty() && std::all_of(d.channels.begin(), d.channels.end(),
                                          [](const auto& c) { return c.change.empty(); }))
     return false;
-  if (digest(d) == s.last_submit_digest) return false;  // nothing new since the last submit
-  s.unacknowledged_strokes += strokes;
-  s.strokes_submitted += strokes;
+  if (digest(d) == last_submit_digest) return false;  // nothing new since the last submit
+  unacknowledged_strokes += strokes;
+  strokes_submitted += strokes;
   DiffHeader header;
-  header.base_version = s.version;
-  header.sequence = s.next_sequence++;
-  header.author = s.options.name;
-  s.ensure_merge_state();
-  Bytes bytes = encode_diff(d, s.base, header, session_wire_options(s.options.wire, s.frame));
-  Diff sent = decode_diff(bytes, s.base);
+  header.base_version = version;
+  header.sequence = next_sequence++;
+  header.author = options.name;
+  Bytes bytes = encode_diff(d, base, header, session_wire_options(options.wire, frame));
+  Diff sent = decode_diff(bytes, base);
   // The host's values become what the peers receive: changed vertices the quantisation left
   // out go back to the base, the others to their decoded values.
-  restore(s.base, d, local);
+  restore(base, d, local);
   apply_diff(sent, local);
-  s.last_submit_digest = digest(capture_diff(s.base, local));
-  s.strokes_at[header.sequence] = s.unacknowledged_strokes;
-  s.submitted[header.sequence] = std::move(sent);
+  // Local now differs from the base at most where `sent` changes it.
+  retouch(local, csculpt::peer::touched(sent));
+  last_submit_digest = digest(captured);
+  strokes_at[header.sequence] = unacknowledged_strokes;
+  submitted[header.sequence] = std::move(sent);
   Command c;
   c.kind = Command::Kind::submit;
-  c.base_version = s.version;
+  c.base_version = version;
   c.bytes = std::move(bytes);
-  c.strokes = s.unacknowledged_strokes;
-  s.node->command(std::move(c));
+  c.strokes = unacknowledged_strokes;
+  node->command(std::move(c));
   return true;
 }
 
@@ -273,6 +324,30 @@ Mesh Session::Impl::fork_base(const HostItem& item) {
   ++branch_rebases;
   if (item.fork) branch_versions_dropped += reached - fork;
   return from;
+}
+
+void Session::Impl::gather(std::span<const std::uint32_t> changed, const char* call) {
+  const std::size_t n = base.vertex_count();
+  for (const std::uint32_t v : changed)
+    if (v >= n)
+      throw InvalidInput(std::string(call) + ": changed vertex " + std::to_string(v) +
+                         " is out of range (the session's mesh has " + std::to_string(n) +
+                         " vertices)");
+  marked.resize(n, 0);
+  candidates.assign(touched.begin(), touched.end());
+  for (const std::uint32_t v : touched) marked[v] = 1;
+  for (const std::uint32_t v : changed)
+    if (!marked[v]) {
+      marked[v] = 1;
+      candidates.push_back(v);
+    }
+  for (const std::uint32_t v : candidates) marked[v] = 0;
+  std::sort(candidates.begin(), candidates.end());
+}
+
+void Session::Impl::retouch(const Mesh& local, std::span<const std::uint32_t> among) {
+  capture_diff_at(base, local, among, captured);
+  touched = csculpt::peer::touched(captured);
 }
 
 void Session::Impl::apply_snapshot(const HostItem& item, Mesh& local) {
@@ -294,9 +369,10 @@ void Session::Impl::apply_snapshot(const HostItem& item, Mesh& local) {
   last_submit_digest = 0;
   reverts.clear();  // the versions it stepped back were another branch's
   ensure_merge_state();
+  retouch_all(local);
 }
 
-bool Session::Impl::apply_version(const HostItem& item, Mesh& local) {
+bool Session::Impl::apply_version(const HostItem& item, Mesh& local, bool unedited) {
   ensure_merge_state();
   // The submit of ours the version includes (none: the state it describes is the base).
   const Diff* ours = nullptr;
@@ -313,7 +389,16 @@ bool Session::Impl::apply_version(const HostItem& item, Mesh& local) {
         }
       }
   reverts.record(item.version, item.merged, base);
-  if (rebase_onto_version(base, ours, item.merged, local, *merger, frame)) ++rebases;
+  // Known equal when the version includes our latest submit (or none was sent) and the host
+  // edited nothing since: the rebase need not compare the whole mesh again.
+  const bool known =
+      unedited && (submitted.empty() ? ours == nullptr : ours == &submitted.rbegin()->second);
+  if (rebase_onto_version(base, ours, item.merged, local, *merger, frame, known)) {
+    ++rebases;
+    retouch_all(local);
+  } else {
+    touched.clear();  // local is the new base (or empty)
+  }
   version = item.version;
   const bool resend = !submitted.empty() && submitted.rbegin()->first != merged_sequence;
   submitted.clear();
@@ -332,9 +417,12 @@ std::size_t Session::update(Mesh& local) {
   for (HostItem& item : s.node->host().take_items()) s.pending.push_back(std::move(item));
   if (s.pending.empty()) return 0;  // hosts call this every frame: nothing to do is free
   // Refused before any version is applied: a bad value leaves them waiting for the next call.
+  // A host that edited nothing since its submit holds only values the session checked.
+  bool unedited = false;
   if (s.has_base && !local.positions.empty()) {
     s.ready_for(local, "update");
-    check_host_values(local, s.base, s.frame, "update");
+    unedited = s.holds_only_submitted(local);
+    if (!unedited) check_host_values(local, s.base, s.frame, "update");
   }
   while (!s.pending.empty()) {
     HostItem& item = s.pending.front();
@@ -344,13 +432,15 @@ std::size_t Session::update(Mesh& local) {
       s.apply_snapshot(item, local);
       ++applied;
     } else if (item.version == s.version + 1) {  // always: the node hands them in order
-      resend |= s.apply_version(item, local);
+      resend |= s.apply_version(item, local, unedited);
       ++applied;
     }
-    s.pending.pop_front();  // only once applied: a failure keeps it for the next call
+    s.pending.pop_front();         // only once applied: a failure keeps it for the next call
+    unedited = s.touched.empty();  // exact after a version or snapshot: local is the base
   }
   s.versions_applied += applied;
-  if (resend && !local.positions.empty()) submit(local, 0);
+  // The touched vertices are exact after a rebase: the resend need not capture the whole mesh.
+  if (resend && !local.positions.empty()) submit(local, 0, {});
   return applied;
 }
 
@@ -364,13 +454,17 @@ void Session::record_stroke(const Mesh& local, std::span<const std::uint32_t> ve
 bool Session::undo(Mesh& local, std::vector<std::uint32_t>& changed) {
   Impl& s = *impl_;
   s.ready_for(local, "undo");
-  return s.undo.undo(local, *s.merger, s.frame, changed);
+  const bool did = s.undo.undo(local, *s.merger, s.frame, changed);
+  s.written(changed);
+  return did;
 }
 
 bool Session::redo(Mesh& local, std::vector<std::uint32_t>& changed) {
   Impl& s = *impl_;
   s.ready_for(local, "redo");
-  return s.undo.redo(local, *s.merger, s.frame, changed);
+  const bool did = s.undo.redo(local, *s.merger, s.frame, changed);
+  s.written(changed);
+  return did;
 }
 
 std::size_t Session::undo_depth() const {

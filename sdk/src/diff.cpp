@@ -35,6 +35,30 @@ void validate_attribute(const AttributeDiff& a, std::uint32_t width, std::uint32
       fail("value of vertex " + std::to_string(a.indices[i / width]) + " is not finite");
 }
 
+/// The listed vertices of one attribute (`width` floats each) whose bits differ, into `out`.
+void capture_listed(const float* base, const float* edited, std::uint32_t width,
+                    std::span<const std::uint32_t> vertices, AttributeDiff& out) {
+  out.indices.clear();
+  out.values.clear();
+  for (const std::uint32_t v : vertices) {
+    const float* e = edited + std::size_t{v} * width;
+    if (same_bits(base + std::size_t{v} * width, e, width)) continue;
+    out.indices.push_back(v);
+    out.values.insert(out.values.end(), e, e + width);
+  }
+}
+
+void check_listed(std::span<const std::uint32_t> vertices, std::size_t vertex_count) {
+  for (std::size_t i = 0; i < vertices.size(); ++i) {
+    if (vertices[i] >= vertex_count)
+      throw InvalidInput("capture_diff_at: vertex " + std::to_string(vertices[i]) +
+                         " out of range (" + std::to_string(vertex_count) + " vertices)");
+    if (i > 0 && vertices[i] <= vertices[i - 1])
+      throw InvalidInput("capture_diff_at: vertices not strictly increasing at entry " +
+                         std::to_string(i));
+  }
+}
+
 }  // namespace
 
 std::size_t Diff::touched_vertices() const {
@@ -80,6 +104,29 @@ Diff capture_diff(const Mesh& base, const Mesh& edited) {
     d.channels.push_back({b.desc, capture_attribute(b.values, e.values, b.desc.width)});
   }
   return d;
+}
+
+void capture_diff_at(const Mesh& base, const Mesh& edited, std::span<const std::uint32_t> vertices,
+                     Diff& out) {
+  if (edited.vertex_count() != base.vertex_count() ||
+      edited.channels.size() != base.channels.size())
+    throw InvalidInput("capture_diff_at: the edited mesh's vertices or channels differ");
+  for (std::size_t c = 0; c < base.channels.size(); ++c)
+    if (edited.channels[c].desc.width != base.channels[c].desc.width ||
+        edited.channels[c].values.size() != base.channels[c].values.size())
+      throw InvalidInput("capture_diff_at: channel '" + base.channels[c].desc.name + "' differs");
+  check_listed(vertices, base.vertex_count());
+  out.vertex_count = static_cast<std::uint32_t>(base.vertex_count());
+  capture_listed(reinterpret_cast<const float*>(base.positions.data()),
+                 reinterpret_cast<const float*>(edited.positions.data()), 3, vertices,
+                 out.positions);
+  out.channels.resize(base.channels.size());
+  for (std::size_t c = 0; c < base.channels.size(); ++c) {
+    const Channel& b = base.channels[c];
+    out.channels[c].desc = b.desc;
+    capture_listed(b.values.data(), edited.channels[c].values.data(), b.desc.width, vertices,
+                   out.channels[c].change);
+  }
 }
 
 void validate(const Diff& diff, const Mesh& base, std::string_view what) {

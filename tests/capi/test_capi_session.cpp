@@ -198,6 +198,47 @@ bool wait_for(const std::function<bool()>& done) {
   return done();
 }
 
+TEST(CapiSession, ASubmitOfTheChangedVerticesReachesThePeerAndABadIndexIsRefused) {
+  csc_mesh* mesh = grid(24);
+  csc_session *a = nullptr, *b = nullptr;
+  const csc_session_options oa = fast(1), ob = fast(2);
+  ASSERT_EQ(csc_session_create(&a, mesh, &oa), CSC_OK) << csc_last_error();
+  ASSERT_EQ(csc_session_join(&b, csc_session_invite(a), &ob), CSC_OK) << csc_last_error();
+  HostArrays ha(mesh), hb(mesh);
+  csc_vertex_arrays va = ha.arrays(), vb = hb.arrays();
+  // b lifts three vertices and paints one; listed backwards, with a repeat
+  const std::vector<std::uint32_t> changed = {300, 41, 7, 41};
+  for (const std::uint32_t v : {7u, 41u, 300u}) hb.positions[3 * v + 2] += 0.2f;
+  hb.channels[0][3 * 300] = 1.f;
+  const HostArrays edited(hb);
+  int32_t sent = -1;
+  std::vector<std::uint32_t> bad = changed;
+  bad.push_back(va.vertex_count + 2);
+  EXPECT_EQ(csc_session_submit_changed(b, &vb, bad.data(), 5, 1, &sent), CSC_ERROR_INVALID_INPUT);
+  EXPECT_NE(std::string(csc_last_error()).find(std::to_string(va.vertex_count + 2)),
+            std::string::npos)
+      << csc_last_error();
+  EXPECT_EQ(sent, -1);
+  EXPECT_TRUE(hb == edited);  // nothing written back
+  EXPECT_EQ(csc_session_submit_changed(b, &vb, nullptr, 2, 1, &sent), CSC_ERROR_INVALID_ARGUMENT);
+  ASSERT_EQ(csc_session_submit_changed(b, &vb, changed.data(), 4, 1, &sent), CSC_OK)
+      << csc_last_error();
+  EXPECT_EQ(sent, 1);
+  EXPECT_FALSE(hb == edited);  // set to what the peers decode
+  ASSERT_EQ(csc_session_submit_changed(b, &vb, nullptr, 0, 0, &sent), CSC_OK);
+  EXPECT_EQ(sent, 0);  // nothing new
+  ASSERT_TRUE(wait_for([&] {
+    csc_session_update(a, &va, nullptr);
+    csc_session_update(b, &vb, nullptr);
+    return csc_session_version(a) >= 1 && csc_session_version(b) >= 1 && ha == hb;
+  }));
+  EXPECT_NEAR(ha.positions[3 * 41 + 2], edited.positions[3 * 41 + 2], 1e-4f);
+  EXPECT_EQ(ha.channels[0][3 * 300], 1.f);
+  csc_session_destroy(b);
+  csc_session_destroy(a);
+  csc_mesh_destroy(mesh);
+}
+
 TEST(CapiSession, PresenceAndPeersCrossTheAbi) {
   csc_mesh* mesh = grid(16);
   csc_session_options oa = fast(1), ob = fast(2);

@@ -389,6 +389,28 @@ class Lifetime(unittest.TestCase):
                 np.testing.assert_array_equal(meshes.bits(agreed.positions), meshes.bits(p))
             self.assertEqual(s.stats.strokes_acknowledged, 1)
 
+    def test_a_submit_of_the_changed_vertices_sends_them_and_refuses_a_bad_index(self):
+        with material_sphere(2) as mesh, csculpt.Session.create(mesh, id=7, **FAST) as s:
+            p, c = host_arrays(mesh)
+            base_p = p.copy()
+            p[:] = meshes.grab(p, (1, 0, 0), 0.8, (0.2, 0, 0))
+            changed = np.flatnonzero(np.any(p != base_p, axis=1))
+            self.assertGreater(changed.size, 5)
+            before = p.copy()
+            with self.assertRaisesRegex(csculpt.InvalidInput, f"changed vertex {len(p) + 3}"):
+                s.submit_changed(p, list(changed) + [len(p) + 3], c, strokes=1)
+            np.testing.assert_array_equal(meshes.bits(p), meshes.bits(before))  # not written
+            # Unsorted, with repeats; the values are rewritten to what the peers receive.
+            self.assertTrue(s.submit_changed(p, np.concatenate([changed[::-1], changed]), c,
+                                             strokes=1))
+            self.assertFalse(np.array_equal(meshes.bits(p), meshes.bits(before)))
+            self.assertFalse(s.submit_changed(p, [], c))  # nothing new
+            expected = p.copy()
+            wait_for(lambda: s.update(p, c) > 0 or s.version >= 1, "version 1")
+            with s.base() as agreed:
+                np.testing.assert_array_equal(meshes.bits(agreed.positions), meshes.bits(expected))
+            self.assertEqual(s.stats.strokes_submitted, 1)
+
     def test_close_context_manager_and_garbage_collection(self):
         with material_sphere(1) as mesh:
             p, c = host_arrays(mesh)

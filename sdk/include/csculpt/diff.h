@@ -41,6 +41,13 @@ struct Diff {
 /// Throws InvalidInput if the connectivity or channel layout differs.
 Diff capture_diff(const Mesh& base, const Mesh& edited);
 
+/// capture_diff over `vertices` only (strictly increasing): the same diff when every vertex that
+/// differs is listed, at the cost of the listed vertices (connectivity is not compared). Writes
+/// into `out`, reusing its buffers. Throws InvalidInput if the vertex counts or channels differ,
+/// or an index is out of range or not increasing.
+void capture_diff_at(const Mesh& base, const Mesh& edited, std::span<const std::uint32_t> vertices,
+                     Diff& out);
+
 /// Capture from raw arrays (what a host holds): positions as xyz floats. Throws InvalidInput
 /// unless both arrays hold the same number of whole vertices of `width` (> 0) values.
 AttributeDiff capture_attribute(std::span<const float> base, std::span<const float> edited,

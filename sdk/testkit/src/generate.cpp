@@ -135,12 +135,16 @@ std::vector<Vec3f> vertex_normals(const Mesh& mesh) {
   return n;
 }
 
-void apply_stroke(Mesh& mesh, const Stroke& s, const Topology* topology) {
+void apply_stroke(Mesh& mesh, const Stroke& s, const Topology* topology,
+                  std::vector<std::uint32_t>* changed) {
   if (!(s.radius > 0) || !std::isfinite(s.radius))
     throw InvalidInput("apply_stroke: the radius must be positive and finite, not " +
                        std::to_string(s.radius));
   const std::size_t n = mesh.vertex_count();
   const Vec3f axis = unit(s.axis);
+  auto wrote = [changed](std::size_t v) {
+    if (changed) changed->push_back(static_cast<std::uint32_t>(v));
+  };
   switch (s.kind) {
     case Stroke::Kind::grab:
     case Stroke::Kind::inflate:
@@ -152,6 +156,7 @@ void apply_stroke(Mesh& mesh, const Stroke& s, const Topology* topology) {
         const Vec3f d = sub(p, s.center);
         const float w = falloff(std::sqrt(dot(d, d)), s.radius);
         if (w == 0.f) continue;
+        wrote(v);
         if (s.kind == Stroke::Kind::grab) {
           p = add(p, scale(axis, s.strength * s.radius * w));
         } else {
@@ -180,6 +185,7 @@ void apply_stroke(Mesh& mesh, const Stroke& s, const Topology* topology) {
           angle = s.strength * along * along * (3 - 2 * along);  // smoothstep
         }
         if (angle == 0.f) continue;
+        wrote(v);
         p = add(s.center, rotate(axis_angle(axis, angle), d));
       }
       break;
@@ -192,6 +198,7 @@ void apply_stroke(Mesh& mesh, const Stroke& s, const Topology* topology) {
         const float w = falloff(std::sqrt(dot(d, d)), s.radius) * std::clamp(s.strength, 0.f, 1.f);
         const auto row = topology->vertex_vertices.row(v);
         if (w == 0.f || row.empty()) continue;
+        wrote(v);
         Vec3f mean{0, 0, 0};
         for (std::uint32_t u : row) mean = add(mean, before[u]);
         mean = scale(mean, 1.f / static_cast<float>(row.size()));
@@ -209,6 +216,7 @@ void apply_stroke(Mesh& mesh, const Stroke& s, const Topology* topology) {
         const Vec3f d = sub(mesh.positions[v], s.center);
         const float w = falloff(std::sqrt(dot(d, d)), s.radius) * std::clamp(s.strength, 0.f, 1.f);
         if (w == 0.f) continue;
+        wrote(v);
         for (int c = 0; c < 3; ++c) {
           float& a = albedo.values[3 * v + static_cast<std::size_t>(c)];
           a += (s.albedo[static_cast<std::size_t>(c)] - a) * w;

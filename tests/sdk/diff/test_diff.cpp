@@ -17,8 +17,8 @@
 
 #include "csculpt/diff.h"
 #include "csculpt/error.h"
-#include "csculpt/testkit/generate.h"
 #include "csculpt/mesh.h"
+#include "csculpt/testkit/generate.h"
 #include "test_meshes.h"
 #include "test_strokes.h"
 #include "test_support.h"
@@ -109,6 +109,31 @@ TEST(DiffCapture, ListsExactlyTheChangedVerticesInIncreasingOrderWithTheirEdited
   for (const char* unchanged : {"albedo", "roughness", "uv"})
     EXPECT_TRUE(channel_diff(d, unchanged).change.empty()) << unchanged;
   EXPECT_EQ(d.touched_vertices(), 5u) << "2, 5, 17, 40, 100: vertex 17 counted once";
+}
+
+TEST(DiffCapture, AtTheListedVerticesEqualsTheWholeCaptureWhenEveryChangeIsListed) {
+  const Mesh base = make_icosphere_with_channels();
+  Mesh edited = base;
+  edited.positions[40].y += 0.25f;
+  edited.positions[17].z += 1.f;
+  channel_values(edited, "tint")[4 * 2 + 0] += 1.f;
+  channel_values(edited, "metallic")[100] = 0.5f;
+  Diff at;
+  at.positions.indices = {999};  // reused buffers start from nothing
+  capture_diff_at(base, edited, std::vector<std::uint32_t>{2, 3, 17, 40, 100}, at);
+  EXPECT_EQ(at, capture_diff(base, edited));
+  capture_diff_at(base, edited, std::vector<std::uint32_t>{3, 40}, at);  // 2, 17, 100 unlisted
+  EXPECT_EQ(at.positions.indices, (std::vector<std::uint32_t>{40}));
+  EXPECT_TRUE(channel_diff(at, "tint").change.empty());
+  EXPECT_NE(invalid_input_message([&] {
+              capture_diff_at(base, edited, std::vector<std::uint32_t>{3, 3}, at);
+            }).find("not strictly increasing"),
+            std::string::npos);
+  const auto n = static_cast<std::uint32_t>(base.vertex_count());
+  EXPECT_NE(invalid_input_message([&] {
+              capture_diff_at(base, edited, std::vector<std::uint32_t>{n}, at);
+            }).find("vertex " + std::to_string(n) + " out of range"),
+            std::string::npos);
 }
 
 TEST(DiffCapture, IsBitwiseOneUlpAndTheSignOfZeroAreChanges) {

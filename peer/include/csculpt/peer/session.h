@@ -224,6 +224,22 @@ class Session {
   /// of `local` are set to what the peers receive (within the wire tolerance). Returns false when
   /// there was nothing new to send. Never waits on the network.
   bool submit(Mesh& local, std::uint32_t strokes = 0);
+  /// The same at the cost of the changed vertices instead of the whole mesh: `changed` lists the
+  /// vertices the host changed since its last submit of either kind, updates in between
+  /// included (any order, repeats allowed; a vertex listed too many costs a little, nothing
+  /// else). What undo() and redo() write need not be listed.
+  /// The session keeps the vertices where `local` differs from base() (touched()) and captures
+  /// the edit over those and `changed` only; the edit sent is the same as submit(local, strokes)
+  /// would send when every change is listed. A change of a vertex the host does not list is not
+  /// sent until a later call lists it, a whole-mesh submit sends it, or an update that applies
+  /// a version finds it (update compares the whole mesh). Throws InvalidInput naming an index
+  /// out of range (nothing is sent or changed).
+  bool submit(Mesh& local, std::uint32_t strokes, std::span<const std::uint32_t> changed);
+  /// The vertices where the host's mesh may differ from base() as far as the session knows,
+  /// increasing: what the last submit sent, what a rebase left, what undo() and redo() wrote.
+  /// Exact after a submit, an update that applied something and join; empty when the host's
+  /// mesh is the base.
+  std::span<const std::uint32_t> touched() const;
   /// Applies every merged version received so far to base() and rebases `local` onto it:
   /// local edits not yet inside a merged version are kept, edits already merged are not
   /// applied twice. A submitted edit that a version did not include (it reached the merger

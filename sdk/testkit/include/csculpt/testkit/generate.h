@@ -47,8 +47,10 @@ struct Stroke {
 
 /// Applies the stroke to `mesh` in place (positions, or the material channels for paint,
 /// which are added if missing). `topology` is needed for smooth only. Throws InvalidInput on
-/// a radius that is not positive and finite.
-void apply_stroke(Mesh& mesh, const Stroke& stroke, const Topology* topology = nullptr);
+/// a radius that is not positive and finite. `changed` (if given) gets the vertices the stroke
+/// wrote appended, each once per call.
+void apply_stroke(Mesh& mesh, const Stroke& stroke, const Topology* topology = nullptr,
+                  std::vector<std::uint32_t>* changed = nullptr);
 
 /// A deterministic artist: `count` strokes at mixed scales (soft brushes as big as half the
 /// model, medium inflates, fine detail, occasional twists and paint) around the surface of
