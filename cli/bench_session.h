@@ -11,7 +11,7 @@ namespace csculpt::cli {
 struct BenchSessionOptions {
   std::uint32_t faces = 320000;
   std::vector<std::uint32_t> peers{2, 4, 8};
-  std::uint32_t sync_ms = 50;
+  std::uint32_t sync_ms = 10;  // the session's default (SessionOptions::sync)
   std::uint32_t samples = 40;
   std::uint64_t seed = 11;
   /// Hosts submit the whole mesh instead of the vertices their strokes changed.

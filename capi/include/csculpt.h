@@ -464,7 +464,7 @@ typedef struct csc_session_options {
   const char* journal_dir;
 } csc_session_options;
 #define CSC_SESSION_OPTIONS_INIT \
-  { sizeof(csc_session_options), NULL, NULL, 0, 50, 200, 600, 1200, 1e-5, 1e-4, 30000, NULL }
+  { sizeof(csc_session_options), NULL, NULL, 0, 10, 200, 600, 1200, 1e-5, 1e-4, 30000, NULL }
 
 /** Starts a session on `mesh` (copied; it becomes version 0). `options` may be NULL. Fails with
  *  CSC_ERROR_IO if the endpoint cannot be bound. */

@@ -229,7 +229,7 @@ class csc_session_options(_Sized):
                 ("evasive_ms", c_uint32), ("expired_ms", c_uint32),
                 ("position_tolerance", c_double), ("channel_tolerance", c_double),
                 ("join_timeout_ms", c_uint32), ("journal_dir", c_char_p)]
-    _defaults_ = {"sync_ms": 50, "heartbeat_ms": 200, "evasive_ms": 600, "expired_ms": 1200,
+    _defaults_ = {"sync_ms": 10, "heartbeat_ms": 200, "evasive_ms": 600, "expired_ms": 1200,
                   "position_tolerance": 1e-5, "channel_tolerance": 1e-4,
                   "join_timeout_ms": 30000}
 

@@ -147,11 +147,12 @@ void destroy(Handle* h, Tag tag) noexcept {
 /// The size of a struct's first published layout (ABI 0.2): the least a caller's struct_size
 /// may say. When a struct grows, specialise this with its old size so older hosts keep working.
 template <class T>
-constexpr std::size_t first_published_size = sizeof(T);
-/// csc_session_options grew journal_dir in 0.4.
+inline constexpr std::size_t first_published_size = sizeof(T);
+/// csc_session_options grew journal_dir in 0.4. (`inline`: an explicit specialisation is not
+/// implicitly so, and every file including this one would define it.)
 template <>
-constexpr std::size_t first_published_size<csc_session_options> = offsetof(csc_session_options,
-                                                                           journal_dir);
+inline constexpr std::size_t first_published_size<csc_session_options> =
+    offsetof(csc_session_options, journal_dir);
 
 void require_struct_size(std::uint32_t declared, std::size_t minimum, const char* name);
 
