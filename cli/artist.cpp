@@ -63,10 +63,7 @@ std::size_t SimulatedArtist::step(peer::Clock::time_point now, bool editing) {
   }
   if (now >= next_submit_) {
     next_submit_ = now + options_.submit_every;
-    // Nothing new to send means the strokes since the last submit changed nothing (a paint in
-    // the colour already there): there is nothing of them to acknowledge, so they are not
-    // carried as unsent for ever.
-    submit(unsent_strokes_);
+    submit(unsent_strokes_);  // counted by the session whether or not anything was sent
     unsent_strokes_ = 0;
   }
   return applied;

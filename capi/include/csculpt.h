@@ -507,10 +507,11 @@ CSC_API csc_status csc_session_copy_base(csc_mesh** out, const csc_session* sess
 
 /** Sends the edit from the agreed version to the host's `local` arrays (same layout as the
  *  session mesh) to the merger, replacing what was sent before for this version; `strokes`
- *  counts the strokes made since the last submit that sent something. Changed values in
- *  `local` are set to what the peers receive (within the wire tolerance). `*sent` (may be
- *  NULL) is 1 if something was sent, 0 if there was nothing new. Copies the arrays once each
- *  way (O(vertices)). */
+ *  counts the strokes made since the last submit. Changed values in `local` are set to what
+ *  the peers receive (within the wire tolerance). `*sent` (may be NULL) is 1 if something was
+ *  sent, 0 if there was nothing new (the strokes changed nothing the session does not hold or
+ *  was not sent already: they count as acknowledged at once). Copies the arrays once each way
+ *  (O(vertices)). */
 CSC_API csc_status csc_session_submit(csc_session* session, const csc_vertex_arrays* local,
                                       uint32_t strokes, int32_t* sent);
 

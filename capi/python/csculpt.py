@@ -1394,9 +1394,10 @@ class Session(_Handle):
 
     def submit(self, positions, channels=None, strokes: int = 0) -> bool:
         """Sends the edit from the agreed version to the host's arrays, replacing what was
-        sent before for this version; `strokes` counts strokes made since the last submit that
-        returned True. Changed values are rewritten in place to what the peers receive (within
-        the wire tolerance). Returns False when there was nothing new to send."""
+        sent before for this version; `strokes` counts strokes made since the last submit.
+        Changed values are rewritten in place to what the peers receive (within the wire
+        tolerance). Returns False when there was nothing new to send (the strokes then count as
+        acknowledged at once: they changed nothing the session does not hold or was not sent)."""
         _check_strokes(strokes)
         ptr, arrays, keep = self._arrays(positions, channels)
         sent = c_int32()

@@ -284,10 +284,16 @@ std::span<const std::uint32_t> Session::touched() const {
 
 bool Session::Impl::send(const Diff& d, Mesh& local, std::uint32_t strokes) {
   check_diff_values(d, base, frame, "submit");  // the changed values: before anything is sent
-  if (d.positions.empty() && std::all_of(d.channels.begin(), d.channels.end(),
-                                         [](const auto& c) { return c.change.empty(); }))
+  const bool empty =
+      d.positions.empty() && std::all_of(d.channels.begin(), d.channels.end(),
+                                         [](const auto& c) { return c.change.empty(); });
+  if (empty || digest(d) == last_submit_digest) {
+    // Nothing new to send: these strokes changed nothing the session does not hold or is not
+    // already sent, so they are acknowledged as they are (not left unacknowledged for ever).
+    strokes_submitted += strokes;
+    strokes_acknowledged += strokes;
     return false;
-  if (digest(d) == last_submit_digest) return false;  // nothing new since the last submit
+  }
   unacknowledged_strokes += strokes;
   strokes_submitted += strokes;
   DiffHeader header;

@@ -377,7 +377,7 @@ static int run(const options* o, scene* sc, stroke* st, csc_session** s) {
         (strokes_unsent || stats.strokes_acknowledged < stats.strokes_submitted)) {
       int32_t sent;
       CHECK(csc_session_submit(*s, &sc->arrays, strokes_unsent, &sent));
-      if (sent) strokes_unsent = 0;
+      strokes_unsent = 0; /* counted whether or not anything was new to send */
       last_submit = now;
     }
     fflush(stdout);

@@ -212,7 +212,7 @@ class Host:
         self.layout = [(name, 1 if v.ndim == 1 else v.shape[1]) for name, v in
                        self.channels.items()]
         self.shown = None          # Blender's values after the last step
-        self.pending_strokes = 0   # strokes not yet in a submit that sent something
+        self.pending_strokes = 0   # strokes made since the last submit
         self.strokes = 0           # strokes recorded
         self.stroke_active = False  # the artist's stroke is under way: hold remote changes
         self.refused = None        # why the object cannot sync now (words), or None
@@ -371,8 +371,9 @@ class Host:
         return True
 
     def _submit(self):
-        if self.session.submit(self.positions, self.channels, strokes=self.pending_strokes):
-            self.pending_strokes = 0
+        # The library counts the strokes whether or not anything was new to send.
+        self.session.submit(self.positions, self.channels, strokes=self.pending_strokes)
+        self.pending_strokes = 0
 
     def step(self):
         """One sync step: the artist's changes recorded and sent, merged versions taken in and

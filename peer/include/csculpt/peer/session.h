@@ -221,9 +221,10 @@ class Session {
   const Mesh& base() const;
   /// Sends the edit from base() to `local` (same connectivity and channels) to the merger,
   /// replacing what was sent before for this base; `strokes` = strokes made since the last
-  /// submit that returned true (they are counted only when something is sent). The changed values
-  /// of `local` are set to what the peers receive (within the wire tolerance). Returns false when
-  /// there was nothing new to send. Never waits on the network.
+  /// submit. The changed values of `local` are set to what the peers receive (within the wire
+  /// tolerance). Returns false when there was nothing new to send: the strokes changed nothing
+  /// the session does not hold or was not sent already, and are counted acknowledged at once.
+  /// Never waits on the network.
   bool submit(Mesh& local, std::uint32_t strokes = 0);
   /// The same at the cost of the changed vertices instead of the whole mesh: `changed` lists the
   /// vertices the host changed since its last submit of either kind, updates in between
