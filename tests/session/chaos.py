@@ -24,6 +24,8 @@ import argparse
 import json
 import os
 import random
+import shutil
+import subprocess
 import sys
 import time
 
@@ -201,6 +203,23 @@ def check(cluster, log):
             "branch_versions_dropped": sum(s["branch_versions_dropped"] for s in summaries)}
 
 
+def diagnose(cluster):
+    """What each live peer is doing: its exit code and stderr, or, when it has printed nothing
+    for 5 s, its threads' stacks (gdb, where installed)."""
+    for p in cluster.live.values():
+        code = p.proc.poll()
+        state = p.state() or {}
+        silent = time.time() - state.get("_read_at", 0)
+        print(f"peer {p.peer_id}: exit {code}, silent {silent:.1f} s, stderr {p.stderr[-500:]!r}",
+              flush=True)
+        if code is None and silent > 5 and shutil.which("gdb"):
+            stacks = subprocess.run(["gdb", "-p", str(p.proc.pid), "-batch", "-ex",
+                                     "thread apply all bt 15"], capture_output=True, text=True,
+                                    timeout=120).stdout
+            print("\n".join(line for line in stacks.splitlines() if line.startswith(("#", "Thread"))),
+                  flush=True)
+
+
 def run(minutes, seed, faces):
     rng = random.Random(seed)
     started = time.time()
@@ -244,6 +263,10 @@ def run(minutes, seed, faces):
                         "agreed_version": settled["version"]})
         print(json.dumps({"chaos": figures}), flush=True)
         return figures
+    except AssertionError:
+        if cluster:
+            diagnose(cluster)
+        raise
     finally:
         if cluster:
             for p in cluster.everyone:
