@@ -23,8 +23,9 @@ MarkerPainter::MarkerPainter(std::uint32_t slot, std::uint32_t first, std::uint3
                              const Mesh& mesh)
     : slot_(slot % kMarkerSlots), first_(first), limit_(limit) {
   if (marker_channel(mesh) < 0)
-    throw InvalidInput("--markers: the session's mesh has no marker channel (its creator must "
-                       "run with --markers too)");
+    throw InvalidInput(
+        "--markers: the session's mesh has no marker channel (its creator must "
+        "run with --markers too)");
 }
 
 bool MarkerPainter::marked(const Mesh& mesh, std::uint32_t vertex) {

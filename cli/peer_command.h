@@ -24,7 +24,7 @@ struct PeerCommandOptions {
   std::uint64_t seed = 1;
   double linger = 5;
   bool ignore_stdin = false;
-  bool markers = false;  ///< a marker with each stroke (markers.h)
+  bool markers = false;           ///< a marker with each stroke (markers.h)
   std::int64_t marker_slot = -1;  ///< -1: the peer id's
   std::uint32_t marker_first = 0;
   std::uint32_t marker_limit = 0xffffffffu;

@@ -1,8 +1,8 @@
 #include "app.h"
 
-#include <epoxy/gl.h>
 #include <backends/imgui_impl_glfw.h>
 #include <backends/imgui_impl_opengl3.h>
+#include <epoxy/gl.h>
 #include <imgui.h>
 
 #include <algorithm>
@@ -18,11 +18,15 @@ struct MeshDeleter {
   void operator()(csc_mesh* mesh) const { csc_mesh_destroy(mesh); }
 };
 
-App* app_of(GLFWwindow* window) { return static_cast<App*>(glfwGetWindowUserPointer(window)); }
+App* app_of(GLFWwindow* window) {
+  return static_cast<App*>(glfwGetWindowUserPointer(window));
+}
 
 // GLFW callbacks: ImGui sees every event first (its 1.86 backend is not installed with
 // callbacks of its own), then the app decides.
-void cursor_callback(GLFWwindow* window, double x, double y) { app_of(window)->on_cursor(x, y); }
+void cursor_callback(GLFWwindow* window, double x, double y) {
+  app_of(window)->on_cursor(x, y);
+}
 void button_callback(GLFWwindow* window, int button, int action, int mods) {
   ImGui_ImplGlfw_MouseButtonCallback(window, button, action, mods);
   app_of(window)->on_button(button, action, mods);
@@ -31,7 +35,9 @@ void key_callback(GLFWwindow* window, int key, int scancode, int action, int mod
   ImGui_ImplGlfw_KeyCallback(window, key, scancode, action, mods);
   app_of(window)->on_key(key, action, mods);
 }
-void char_callback(GLFWwindow* window, unsigned int c) { ImGui_ImplGlfw_CharCallback(window, c); }
+void char_callback(GLFWwindow* window, unsigned int c) {
+  ImGui_ImplGlfw_CharCallback(window, c);
+}
 void scroll_callback(GLFWwindow* window, double dx, double dy) {
   ImGui_ImplGlfw_ScrollCallback(window, dx, dy);
   app_of(window)->on_scroll(dy);
@@ -91,8 +97,10 @@ bool App::open_window() {
   glfwSetKeyCallback(window_, key_callback);
   glfwSetCharCallback(window_, char_callback);
   glfwSetScrollCallback(window_, scroll_callback);
-  if (!tablet_.open(window_, tablet_status_)) tablet_status_ = "no pen: " + tablet_status_;
-  else tablet_status_ = std::to_string(tablet_.tablets()) + " pen device(s)";
+  if (!tablet_.open(window_, tablet_status_))
+    tablet_status_ = "no pen: " + tablet_status_;
+  else
+    tablet_status_ = std::to_string(tablet_.tablets()) + " pen device(s)";
   return true;
 }
 
@@ -122,7 +130,8 @@ void App::layout_changed() {
       hi[a] = std::fmax(hi[a], document_.positions[i + a]);
     }
   const glm::vec3 extent = hi - lo;
-  camera_.frame((lo + hi) * 0.5f, 0.5f * std::sqrt(extent.x * extent.x + extent.y * extent.y + extent.z * extent.z));
+  camera_.frame((lo + hi) * 0.5f,
+                0.5f * std::sqrt(extent.x * extent.x + extent.y * extent.y + extent.z * extent.z));
   std::snprintf(path_text_.data(), path_text_.size(), "%s", "");
   attribution_dirty_ = true;
 }
@@ -235,7 +244,8 @@ bool App::frame() {
   if (const std::optional<float> pressure = tablet_.poll()) on_pressure(*pressure);
   if (replay_.active()) replay_.step(*this);
   session_tick();
-  if (attribution_view_ && !session_.active()) toggle_attribution_view();  // left: real colours back
+  if (attribution_view_ && !session_.active())
+    toggle_attribution_view();  // left: real colours back
   if (attribution_view_ && attribution_dirty_) {
     // The worker computes them after each merged version; until the first, keep trying.
     if (session_.attribution_colours(attribution_rgb_) &&
@@ -255,9 +265,11 @@ bool App::frame() {
   }
   if (glfwWindowShouldClose(window_)) return false;
   // A replay holds the exit back until it has run, unless it waits for a session that failed.
-  const bool session_failed = replay_.waiting_for_session() && !session_.active() && !session_.joining();
+  const bool session_failed =
+      replay_.waiting_for_session() && !session_.active() && !session_.joining();
   const bool replay_done = !replay_.loaded() || replay_.finished() || session_failed;
-  return !(options_.exit_after_seconds && replay_done && glfwGetTime() - start_time_ >= *options_.exit_after_seconds);
+  return !(options_.exit_after_seconds && replay_done &&
+           glfwGetTime() - start_time_ >= *options_.exit_after_seconds);
 }
 
 // On exit: the last versions in, then the screenshot and the save (issue 11's contract).
@@ -286,13 +298,16 @@ void App::finish() {
         if (c == ' ' || c == ',') c = '_';
       names += (names.empty() ? "" : ",") + name;
     }
-    std::printf("SESSION id=%016llx merger=%016llx version=%llu members=%u submitted=%llu acknowledged=%llu "
-                "presence=%zu peers=%s\n",
-                static_cast<unsigned long long>(session_.id()), static_cast<unsigned long long>(stats.merger),
-                static_cast<unsigned long long>(session_.version()), stats.members,
-                static_cast<unsigned long long>(stats.strokes_submitted),
-                static_cast<unsigned long long>(stats.strokes_acknowledged), session_.presence_seen(),
-                names.c_str());
+    std::printf(
+        "SESSION id=%016llx merger=%016llx version=%llu members=%u submitted=%llu "
+        "acknowledged=%llu "
+        "presence=%zu peers=%s\n",
+        static_cast<unsigned long long>(session_.id()),
+        static_cast<unsigned long long>(stats.merger),
+        static_cast<unsigned long long>(session_.version()), stats.members,
+        static_cast<unsigned long long>(stats.strokes_submitted),
+        static_cast<unsigned long long>(stats.strokes_acknowledged), session_.presence_seen(),
+        names.c_str());
     std::fflush(stdout);
   }
   session_.leave();

@@ -21,8 +21,8 @@
 #include "replay.h"
 #include "sculptor.h"
 #include "session_link.h"
-#include "tablet_pressure.h"
 #include "stroke_history.h"
+#include "tablet_pressure.h"
 
 int run_app(const AppOptions& options);
 
@@ -41,7 +41,9 @@ class App final : public InputHandlers {
   void on_scroll(double dy) override;
   void on_pressure(float pressure) override { pressure_ = pressure; }
   bool in_session() const override { return session_.active(); }
-  unsigned long long session_version() const override { return session_.active() ? session_.version() : 0; }
+  unsigned long long session_version() const override {
+    return session_.active() ? session_.version() : 0;
+  }
 
  private:
   enum class Drag { none, stroke, orbit, pan };

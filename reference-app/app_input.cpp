@@ -71,8 +71,8 @@ void App::continue_stroke() {
   int width = 0, height = 0;
   glfwGetWindowSize(window_, &width, &height);
   if (stroke_kind_ == BrushKind::grab) {
-    const glm::vec3 target = camera_.point_on_view_plane(float(cursor_x_), float(cursor_y_), float(width),
-                                                         float(height), grab_anchor_);
+    const glm::vec3 target = camera_.point_on_view_plane(float(cursor_x_), float(cursor_y_),
+                                                         float(width), float(height), grab_anchor_);
     sculptor_.grab_move(target - grab_anchor_);
     drag_x_ = cursor_x_, drag_y_ = cursor_y_;
     return;
@@ -83,12 +83,15 @@ void App::continue_stroke() {
   if (length < spacing) return;  // keep the last dab as the anchor until a full step is made
   const int steps = static_cast<int>(length / spacing);
   for (int i = 1; i <= steps; ++i) {
-    const double x = drag_x_ + dx * (spacing * i / length), y = drag_y_ + dy * (spacing * i / length);
+    const double x = drag_x_ + dx * (spacing * i / length),
+                 y = drag_y_ + dy * (spacing * i / length);
     const auto start = std::chrono::steady_clock::now();
     RayHit hit;
     if (pick(x, y, hit)) sculptor_.dab(dab_input(hit), brush_);
     if (benchmarking_)
-      dab_ms_.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+      dab_ms_.push_back(
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+              .count());
   }
   drag_x_ += dx * (spacing * steps / length);
   drag_y_ += dy * (spacing * steps / length);
@@ -109,15 +112,20 @@ void App::on_cursor(double x, double y) {
   const double dx = x - cursor_x_, dy = y - cursor_y_;
   cursor_x_ = x, cursor_y_ = y;
   switch (drag_) {
-    case Drag::stroke: continue_stroke(); break;
-    case Drag::orbit: camera_.orbit(float(dx), float(dy)); break;
+    case Drag::stroke:
+      continue_stroke();
+      break;
+    case Drag::orbit:
+      camera_.orbit(float(dx), float(dy));
+      break;
     case Drag::pan: {
       int width = 0, height = 0;
       glfwGetWindowSize(window_, &width, &height);
       camera_.pan(float(dx), float(dy), float(height));
       break;
     }
-    case Drag::none: break;
+    case Drag::none:
+      break;
   }
 }
 
@@ -128,8 +136,10 @@ void App::on_button(int button, int action, int mods) {
   }
   if (action != GLFW_PRESS || drag_ != Drag::none || over_panel(cursor_x_, cursor_y_)) return;
   drag_x_ = cursor_x_, drag_y_ = cursor_y_;
-  if (button == GLFW_MOUSE_BUTTON_LEFT) begin_stroke(mods);
-  else if (button == GLFW_MOUSE_BUTTON_RIGHT || button == GLFW_MOUSE_BUTTON_MIDDLE) drag_ = Drag::pan;
+  if (button == GLFW_MOUSE_BUTTON_LEFT)
+    begin_stroke(mods);
+  else if (button == GLFW_MOUSE_BUTTON_RIGHT || button == GLFW_MOUSE_BUTTON_MIDDLE)
+    drag_ = Drag::pan;
 }
 
 void App::on_scroll(double dy) {
@@ -155,16 +165,19 @@ void App::session_step(bool redo) {
 void App::on_key(int key, int action, int mods) {
   if (action != GLFW_PRESS && action != GLFW_REPEAT) return;
   if (imgui_ready_ && ImGui::GetIO().WantTextInput) return;  // typing an invite or a path
-  if (drag_ == Drag::stroke) return;                          // no tool change inside a stroke
+  if (drag_ == Drag::stroke) return;                         // no tool change inside a stroke
   shortcut(key, mods);
 }
 
 bool App::shortcut(int key, int mods) {
   const bool ctrl = mods & GLFW_MOD_CONTROL, shift = mods & GLFW_MOD_SHIFT;
   if (ctrl) {
-    if (key == GLFW_KEY_Z) shift ? redo() : undo();
-    else if (key == GLFW_KEY_Y) redo();
-    else return false;
+    if (key == GLFW_KEY_Z)
+      shift ? redo() : undo();
+    else if (key == GLFW_KEY_Y)
+      redo();
+    else
+      return false;
     return true;
   }
   auto select = [&](BrushKind kind) { brush_.kind = kind; };
@@ -173,37 +186,99 @@ bool App::shortcut(int key, int mods) {
     brush_.paint_channel = channel;
   };
   switch (key) {
-    case GLFW_KEY_1: case GLFW_KEY_KP_1: camera_.set_view(ViewPreset::front); break;
-    case GLFW_KEY_3: case GLFW_KEY_KP_3: camera_.set_view(ViewPreset::side); break;
-    case GLFW_KEY_7: case GLFW_KEY_KP_7: camera_.set_view(ViewPreset::top); break;
-    case GLFW_KEY_D: select(BrushKind::draw); break;
-    case GLFW_KEY_G: select(BrushKind::grab); break;
-    case GLFW_KEY_I: select(BrushKind::inflate); break;
-    case GLFW_KEY_S: select(BrushKind::smooth); break;
-    case GLFW_KEY_L: select(BrushKind::flatten); break;
-    case GLFW_KEY_C: select(BrushKind::crease); break;
-    case GLFW_KEY_P: select(BrushKind::pinch); break;
-    case GLFW_KEY_T: select(BrushKind::twist); break;
-    case GLFW_KEY_B: paint(PaintChannel::albedo); break;
-    case GLFW_KEY_R: paint(PaintChannel::roughness); break;
-    case GLFW_KEY_M: paint(PaintChannel::metallic); break;
-    case GLFW_KEY_W: view_.wireframe = !view_.wireframe; break;
-    case GLFW_KEY_F: view_.flat_shading = !view_.flat_shading; break;
-    case GLFW_KEY_X: brush_.symmetry[0] = !brush_.symmetry[0]; break;
-    case GLFW_KEY_Y: brush_.symmetry[1] = !brush_.symmetry[1]; break;
-    case GLFW_KEY_Z: brush_.symmetry[2] = !brush_.symmetry[2]; break;
-    case GLFW_KEY_E: brush_.invert = !brush_.invert; break;
-    case GLFW_KEY_V: brush_.front_faces_only = !brush_.front_faces_only; break;
-    case GLFW_KEY_LEFT_BRACKET: brush_.radius_pixels = std::max(4.f, brush_.radius_pixels * 0.8f); break;
-    case GLFW_KEY_RIGHT_BRACKET: brush_.radius_pixels = std::min(400.f, brush_.radius_pixels * 1.25f); break;
-    case GLFW_KEY_MINUS: brush_.strength = std::max(0.05f, brush_.strength - 0.1f); break;
-    case GLFW_KEY_EQUAL: brush_.strength = std::min(1.f, brush_.strength + 0.1f); break;
-    case GLFW_KEY_F1: case GLFW_KEY_F2: case GLFW_KEY_F3: case GLFW_KEY_F4: case GLFW_KEY_F5:
+    case GLFW_KEY_1:
+    case GLFW_KEY_KP_1:
+      camera_.set_view(ViewPreset::front);
+      break;
+    case GLFW_KEY_3:
+    case GLFW_KEY_KP_3:
+      camera_.set_view(ViewPreset::side);
+      break;
+    case GLFW_KEY_7:
+    case GLFW_KEY_KP_7:
+      camera_.set_view(ViewPreset::top);
+      break;
+    case GLFW_KEY_D:
+      select(BrushKind::draw);
+      break;
+    case GLFW_KEY_G:
+      select(BrushKind::grab);
+      break;
+    case GLFW_KEY_I:
+      select(BrushKind::inflate);
+      break;
+    case GLFW_KEY_S:
+      select(BrushKind::smooth);
+      break;
+    case GLFW_KEY_L:
+      select(BrushKind::flatten);
+      break;
+    case GLFW_KEY_C:
+      select(BrushKind::crease);
+      break;
+    case GLFW_KEY_P:
+      select(BrushKind::pinch);
+      break;
+    case GLFW_KEY_T:
+      select(BrushKind::twist);
+      break;
+    case GLFW_KEY_B:
+      paint(PaintChannel::albedo);
+      break;
+    case GLFW_KEY_R:
+      paint(PaintChannel::roughness);
+      break;
+    case GLFW_KEY_M:
+      paint(PaintChannel::metallic);
+      break;
+    case GLFW_KEY_W:
+      view_.wireframe = !view_.wireframe;
+      break;
+    case GLFW_KEY_F:
+      view_.flat_shading = !view_.flat_shading;
+      break;
+    case GLFW_KEY_X:
+      brush_.symmetry[0] = !brush_.symmetry[0];
+      break;
+    case GLFW_KEY_Y:
+      brush_.symmetry[1] = !brush_.symmetry[1];
+      break;
+    case GLFW_KEY_Z:
+      brush_.symmetry[2] = !brush_.symmetry[2];
+      break;
+    case GLFW_KEY_E:
+      brush_.invert = !brush_.invert;
+      break;
+    case GLFW_KEY_V:
+      brush_.front_faces_only = !brush_.front_faces_only;
+      break;
+    case GLFW_KEY_LEFT_BRACKET:
+      brush_.radius_pixels = std::max(4.f, brush_.radius_pixels * 0.8f);
+      break;
+    case GLFW_KEY_RIGHT_BRACKET:
+      brush_.radius_pixels = std::min(400.f, brush_.radius_pixels * 1.25f);
+      break;
+    case GLFW_KEY_MINUS:
+      brush_.strength = std::max(0.05f, brush_.strength - 0.1f);
+      break;
+    case GLFW_KEY_EQUAL:
+      brush_.strength = std::min(1.f, brush_.strength + 0.1f);
+      break;
+    case GLFW_KEY_F1:
+    case GLFW_KEY_F2:
+    case GLFW_KEY_F3:
+    case GLFW_KEY_F4:
+    case GLFW_KEY_F5:
       brush_.falloff = static_cast<Falloff>(key - GLFW_KEY_F1);
       break;
-    case GLFW_KEY_TAB: show_ui_ = !show_ui_; break;
-    case GLFW_KEY_A: toggle_attribution_view(); break;
-    default: return false;
+    case GLFW_KEY_TAB:
+      show_ui_ = !show_ui_;
+      break;
+    case GLFW_KEY_A:
+      toggle_attribution_view();
+      break;
+    default:
+      return false;
   }
   return true;
 }

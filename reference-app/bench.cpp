@@ -13,7 +13,8 @@ namespace {
 double percentile(std::vector<double> values, double p) {
   if (values.empty()) return 0.0;
   std::sort(values.begin(), values.end());
-  const size_t index = std::min(values.size() - 1, static_cast<size_t>(std::ceil(p * double(values.size())) - 1));
+  const size_t index =
+      std::min(values.size() - 1, static_cast<size_t>(std::ceil(p * double(values.size())) - 1));
   return values[index];
 }
 
@@ -30,14 +31,17 @@ int App::run_bench() {
   // the frames then include csc_session_update's rebase of the artist's arrays.
   uint64_t versions_before = session_.stats().versions_applied;
   auto print = [&](const char* mode) {
-    const double p50 = percentile(frame_ms, 0.5), p99 = percentile(frame_ms, 0.99), worst = percentile(frame_ms, 1.0);
+    const double p50 = percentile(frame_ms, 0.5), p99 = percentile(frame_ms, 0.99),
+                 worst = percentile(frame_ms, 1.0);
     const csc_session_stats& stats = session_.stats();
-    std::printf("{\"bench\":\"app_frames\",\"mode\":\"%s\",\"faces\":%u,\"vertices\":%u,\"width\":%d,"
-                "\"height\":%d,\"frames\":%u,\"frame_ms_p50\":%.3f,\"frame_ms_p99\":%.3f,\"frame_ms_max\":%.3f,"
-                "\"fps_p50\":%.2f,\"fps_p99\":%.2f,\"session_members\":%u,\"versions_applied\":%llu}\n",
-                mode, document_.triangle_count(), document_.vertex_count(), width, height, frames, p50, p99, worst,
-                1000.0 / p50, 1000.0 / p99, session_.active() ? stats.members : 0u,
-                static_cast<unsigned long long>(stats.versions_applied - versions_before));
+    std::printf(
+        "{\"bench\":\"app_frames\",\"mode\":\"%s\",\"faces\":%u,\"vertices\":%u,\"width\":%d,"
+        "\"height\":%d,\"frames\":%u,\"frame_ms_p50\":%.3f,\"frame_ms_p99\":%.3f,\"frame_ms_max\":%"
+        ".3f,"
+        "\"fps_p50\":%.2f,\"fps_p99\":%.2f,\"session_members\":%u,\"versions_applied\":%llu}\n",
+        mode, document_.triangle_count(), document_.vertex_count(), width, height, frames, p50, p99,
+        worst, 1000.0 / p50, 1000.0 / p99, session_.active() ? stats.members : 0u,
+        static_cast<unsigned long long>(stats.versions_applied - versions_before));
     std::fflush(stdout);
     versions_before = stats.versions_applied;
   };
@@ -45,7 +49,9 @@ int App::run_bench() {
     const auto start = std::chrono::steady_clock::now();
     frame();
     glFinish();  // count the frame's drawing, not only its submission
-    frame_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+    frame_ms.push_back(
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+            .count());
   };
   const double warm_until = glfwGetTime() + options_.bench_warmup_seconds;
   for (int warm = 0; warm < 5 || glfwGetTime() < warm_until; ++warm) frame();
@@ -69,10 +75,12 @@ int App::run_bench() {
   on_button(GLFW_MOUSE_BUTTON_LEFT, GLFW_RELEASE, 0);
   benchmarking_ = false;
   print("sculpting");
-  std::printf("{\"bench\":\"app_dab\",\"faces\":%u,\"vertices\":%u,\"radius_px\":%.0f,\"dabs\":%zu,"
-              "\"dab_ms_p50\":%.4f,\"dab_ms_p99\":%.4f,\"vertices_last_dab\":%u}\n",
-              document_.triangle_count(), document_.vertex_count(), double(brush_.radius_pixels), dab_ms_.size(),
-              percentile(dab_ms_, 0.5), percentile(dab_ms_, 0.99), sculptor_.last_dab_vertices());
+  std::printf(
+      "{\"bench\":\"app_dab\",\"faces\":%u,\"vertices\":%u,\"radius_px\":%.0f,\"dabs\":%zu,"
+      "\"dab_ms_p50\":%.4f,\"dab_ms_p99\":%.4f,\"vertices_last_dab\":%u}\n",
+      document_.triangle_count(), document_.vertex_count(), double(brush_.radius_pixels),
+      dab_ms_.size(), percentile(dab_ms_, 0.5), percentile(dab_ms_, 0.99),
+      sculptor_.last_dab_vertices());
   std::fflush(stdout);
   return 0;
 }

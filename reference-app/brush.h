@@ -9,8 +9,8 @@ enum class BrushKind { draw, grab, inflate, smooth, flatten, crease, pinch, twis
 enum class PaintChannel { albedo, roughness, metallic };
 enum class Falloff { smooth, sphere, linear, sharp, constant };
 
-inline constexpr std::array kBrushNames = {"Draw", "Grab", "Inflate", "Smooth", "Flatten",
-                                           "Crease", "Pinch", "Twist", "Paint"};
+inline constexpr std::array kBrushNames = {"Draw",   "Grab",  "Inflate", "Smooth", "Flatten",
+                                           "Crease", "Pinch", "Twist",   "Paint"};
 inline constexpr std::array kFalloffNames = {"Smooth", "Sphere", "Linear", "Sharp", "Constant"};
 inline constexpr std::array kPaintChannelNames = {"Albedo", "Roughness", "Metallic"};
 

@@ -15,7 +15,8 @@ glm::vec3 vertex(const std::vector<float>& positions, uint32_t v) {
 }
 
 // Slab test: the entry distance of the ray into the box, or infinity.
-float box_entry(glm::vec3 lo, glm::vec3 hi, glm::vec3 origin, glm::vec3 inverse_direction, float best) {
+float box_entry(glm::vec3 lo, glm::vec3 hi, glm::vec3 origin, glm::vec3 inverse_direction,
+                float best) {
   float t0 = 0.f, t1 = best;
   for (int a = 0; a < 3; ++a) {
     float near = (lo[a] - origin[a]) * inverse_direction[a];
@@ -30,7 +31,8 @@ float box_entry(glm::vec3 lo, glm::vec3 hi, glm::vec3 origin, glm::vec3 inverse_
 
 }  // namespace
 
-void TriangleBvh::build(const std::vector<float>& positions, const std::vector<uint32_t>& triangles) {
+void TriangleBvh::build(const std::vector<float>& positions,
+                        const std::vector<uint32_t>& triangles) {
   const uint32_t count = static_cast<uint32_t>(triangles.size() / 3);
   nodes_.clear();
   nodes_.reserve(2 * count / kLeafSize + 1);
@@ -41,14 +43,16 @@ void TriangleBvh::build(const std::vector<float>& positions, const std::vector<u
   for (uint32_t t = 0; t < count; ++t) {
     order_[t] = t;
     centroids[t] = (vertex(positions, triangles[3 * t]) + vertex(positions, triangles[3 * t + 1]) +
-                    vertex(positions, triangles[3 * t + 2])) / 3.f;
+                    vertex(positions, triangles[3 * t + 2])) /
+                   3.f;
   }
   if (count > 0) build_node(positions, triangles, centroids, 0, count, kNone);
   refit_stamp_.assign(nodes_.size(), 0);
   refit_epoch_ = 0;
 }
 
-uint32_t TriangleBvh::build_node(const std::vector<float>& positions, const std::vector<uint32_t>& triangles,
+uint32_t TriangleBvh::build_node(const std::vector<float>& positions,
+                                 const std::vector<uint32_t>& triangles,
                                  std::vector<glm::vec3>& centroids, uint32_t begin, uint32_t end,
                                  uint32_t parent) {
   const uint32_t index = static_cast<uint32_t>(nodes_.size());
@@ -102,7 +106,8 @@ void TriangleBvh::refit(const std::vector<float>& positions, const std::vector<u
   }
   refit_nodes_.clear();
   for (uint32_t t : changed_triangles)
-    for (uint32_t n = leaf_of_triangle_[t]; n != kNone && refit_stamp_[n] != refit_epoch_; n = parent_[n]) {
+    for (uint32_t n = leaf_of_triangle_[t]; n != kNone && refit_stamp_[n] != refit_epoch_;
+         n = parent_[n]) {
       refit_stamp_[n] = refit_epoch_;
       refit_nodes_.push_back(n);
     }
@@ -120,8 +125,9 @@ void TriangleBvh::refit(const std::vector<float>& positions, const std::vector<u
   }
 }
 
-RayHit TriangleBvh::raycast(const std::vector<float>& positions, const std::vector<uint32_t>& triangles,
-                            glm::vec3 origin, glm::vec3 direction) const {
+RayHit TriangleBvh::raycast(const std::vector<float>& positions,
+                            const std::vector<uint32_t>& triangles, glm::vec3 origin,
+                            glm::vec3 direction) const {
   RayHit best;
   best.distance = std::numeric_limits<float>::max();
   if (nodes_.empty()) return best;

@@ -39,8 +39,10 @@ class TriangleBvh {
     uint32_t count = 0;  // leaf: triangles; inner: 0 (the left child is the next node)
   };
   uint32_t build_node(const std::vector<float>& positions, const std::vector<uint32_t>& triangles,
-                      std::vector<glm::vec3>& centroids, uint32_t begin, uint32_t end, uint32_t parent);
-  void fit_leaf(Node& node, const std::vector<float>& positions, const std::vector<uint32_t>& triangles) const;
+                      std::vector<glm::vec3>& centroids, uint32_t begin, uint32_t end,
+                      uint32_t parent);
+  void fit_leaf(Node& node, const std::vector<float>& positions,
+                const std::vector<uint32_t>& triangles) const;
 
   std::vector<Node> nodes_;  // pre-order: children come after their parent
   std::vector<uint32_t> order_, parent_, leaf_of_triangle_;
@@ -61,8 +63,9 @@ void TriangleBvh::for_each_triangle_near(glm::vec3 center, float radius, Visit&&
     stack_.pop_back();
     float d2 = 0.f;  // squared distance from the sphere's centre to the box
     for (int a = 0; a < 3; ++a) {
-      const float e = center[a] < node.lo[a] ? node.lo[a] - center[a]
-                      : center[a] > node.hi[a] ? center[a] - node.hi[a] : 0.f;
+      const float e = center[a] < node.lo[a]   ? node.lo[a] - center[a]
+                      : center[a] > node.hi[a] ? center[a] - node.hi[a]
+                                               : 0.f;
       d2 += e * e;
     }
     if (d2 > r2) continue;

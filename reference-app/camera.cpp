@@ -32,25 +32,37 @@ void OrbitCamera::pan(float dx_pixels, float dy_pixels, float viewport_height) {
 }
 
 void OrbitCamera::zoom(float steps) {
-  distance_ = std::clamp(distance_ * std::pow(0.9f, steps), scene_radius_ * 0.05f, scene_radius_ * 50.f);
+  distance_ =
+      std::clamp(distance_ * std::pow(0.9f, steps), scene_radius_ * 0.05f, scene_radius_ * 50.f);
 }
 
 void OrbitCamera::set_view(ViewPreset preset) {
   switch (preset) {
-    case ViewPreset::front: yaw_ = 0.f, pitch_ = 0.f; break;
-    case ViewPreset::side: yaw_ = 1.5707964f, pitch_ = 0.f; break;
-    case ViewPreset::top: yaw_ = 0.f, pitch_ = kMaxPitch; break;
+    case ViewPreset::front:
+      yaw_ = 0.f, pitch_ = 0.f;
+      break;
+    case ViewPreset::side:
+      yaw_ = 1.5707964f, pitch_ = 0.f;
+      break;
+    case ViewPreset::top:
+      yaw_ = 0.f, pitch_ = kMaxPitch;
+      break;
   }
 }
 
 glm::vec3 OrbitCamera::forward() const {
   // Yaw 0, pitch 0: looking from +Z towards -Z. Yaw turns to look from +X (side view).
-  return -glm::vec3(std::cos(pitch_) * std::sin(yaw_), std::sin(pitch_), std::cos(pitch_) * std::cos(yaw_));
+  return -glm::vec3(std::cos(pitch_) * std::sin(yaw_), std::sin(pitch_),
+                    std::cos(pitch_) * std::cos(yaw_));
 }
 
-glm::vec3 OrbitCamera::eye() const { return target_ - forward() * distance_; }
+glm::vec3 OrbitCamera::eye() const {
+  return target_ - forward() * distance_;
+}
 
-glm::mat4 OrbitCamera::view() const { return glm::lookAt(eye(), target_, glm::vec3(0.f, 1.f, 0.f)); }
+glm::mat4 OrbitCamera::view() const {
+  return glm::lookAt(eye(), target_, glm::vec3(0.f, 1.f, 0.f));
+}
 
 glm::mat4 OrbitCamera::projection(float aspect) const {
   const float near_plane = std::max(distance_ - scene_radius_ * 4.f, distance_ * 0.01f);
@@ -71,7 +83,8 @@ float OrbitCamera::world_per_pixel(float depth, float viewport_height) const {
   return 2.f * depth * std::tan(fov_y_ / 2.f) / viewport_height;
 }
 
-glm::vec3 OrbitCamera::point_on_view_plane(float x, float y, float width, float height, glm::vec3 anchor) const {
+glm::vec3 OrbitCamera::point_on_view_plane(float x, float y, float width, float height,
+                                           glm::vec3 anchor) const {
   const Ray ray = ray_through(x, y, width, height);
   const glm::vec3 normal = forward();
   const float along = glm::dot(anchor - ray.origin, normal) / glm::dot(ray.direction, normal);

@@ -27,7 +27,8 @@ class OrbitCamera {
   /** World length of `pixels` at `depth` along the view direction. */
   float world_per_pixel(float depth, float viewport_height) const;
   /** The point under pixel (x, y) on the plane through `anchor` facing the camera. */
-  glm::vec3 point_on_view_plane(float x, float y, float width, float height, glm::vec3 anchor) const;
+  glm::vec3 point_on_view_plane(float x, float y, float width, float height,
+                                glm::vec3 anchor) const;
   glm::vec3 forward() const;
 
  private:

@@ -14,10 +14,13 @@ namespace {
 
 constexpr int kRingSegments = 40;
 
-glm::vec3 vec(const std::array<float, 3>& a) { return {a[0], a[1], a[2]}; }
+glm::vec3 vec(const std::array<float, 3>& a) {
+  return {a[0], a[1], a[2]};
+}
 
 // Window pixel of a world point, or false behind the camera.
-bool project(const glm::mat4& view_projection, glm::vec3 p, float width, float height, ImVec2& out) {
+bool project(const glm::mat4& view_projection, glm::vec3 p, float width, float height,
+             ImVec2& out) {
   const glm::vec4 clip = view_projection * glm::vec4(p, 1.f);
   if (clip.w <= 1e-6f) return false;
   out = ImVec2((clip.x / clip.w * 0.5f + 0.5f) * width, (0.5f - clip.y / clip.w * 0.5f) * height);
@@ -46,7 +49,8 @@ bool App::surface_normal(glm::vec3 point, float radius, glm::vec3& normal) const
   const float distance = glm::length(point - eye);
   normal = -camera_.forward();  // a screen-facing ring where the ray finds no surface
   if (distance <= 0.f) return false;
-  const RayHit hit = bvh_.raycast(document_.positions, document_.triangles, eye, (point - eye) / distance);
+  const RayHit hit =
+      bvh_.raycast(document_.positions, document_.triangles, eye, (point - eye) / distance);
   if (!hit.hit) return true;
   if (hit.distance < distance - std::max(radius, 0.01f * distance)) return false;
   glm::vec3 corner[3];
@@ -64,14 +68,16 @@ void App::draw_remote_cursors() {
   int width = 0, height = 0;
   glfwGetWindowSize(window_, &width, &height);
   if (width <= 0 || height <= 0) return;
-  const glm::mat4 view_projection = camera_.projection(float(width) / float(height)) * camera_.view();
+  const glm::mat4 view_projection =
+      camera_.projection(float(width) / float(height)) * camera_.view();
   ImDrawList* draw = ImGui::GetBackgroundDrawList();  // over the mesh, under the panels
   for (const SessionLink::Cursor& cursor : session_.cursors()) {
     const glm::vec3 centre = vec(cursor.position);
     glm::vec3 normal;
     if (!surface_normal(centre, cursor.radius, normal)) continue;
     // Two axes in the surface's plane, then the ring's points in it.
-    const glm::vec3 helper = std::abs(normal.y) < 0.9f ? glm::vec3(0.f, 1.f, 0.f) : glm::vec3(1.f, 0.f, 0.f);
+    const glm::vec3 helper =
+        std::abs(normal.y) < 0.9f ? glm::vec3(0.f, 1.f, 0.f) : glm::vec3(1.f, 0.f, 0.f);
     const glm::vec3 u = glm::normalize(glm::cross(normal, helper)), v = glm::cross(normal, u);
     std::array<ImVec2, kRingSegments> ring;
     bool visible = true;
@@ -81,10 +87,12 @@ void App::draw_remote_cursors() {
       visible = project(view_projection, p, float(width), float(height), ring[size_t(i)]);
     }
     ImVec2 middle;
-    if (!visible || !project(view_projection, centre, float(width), float(height), middle)) continue;
+    if (!visible || !project(view_projection, centre, float(width), float(height), middle))
+      continue;
     const ImU32 colour = ImGui::ColorConvertFloat4ToU32(
         ImVec4(cursor.colour[0], cursor.colour[1], cursor.colour[2], 0.95f));
-    draw->AddPolyline(ring.data(), kRingSegments, colour, ImDrawFlags_Closed, cursor.active ? 3.f : 2.f);
+    draw->AddPolyline(ring.data(), kRingSegments, colour, ImDrawFlags_Closed,
+                      cursor.active ? 3.f : 2.f);
     draw->AddCircleFilled(middle, cursor.active ? 4.f : 2.5f, colour);
   }
 }

@@ -30,7 +30,9 @@ uint32_t spread_bits(uint32_t v) {
 }
 
 uint32_t morton_code(const float* p) {
-  auto cell = [](float c) { return static_cast<uint32_t>(std::clamp((c + 1.f) * 511.5f, 0.f, 1023.f)); };
+  auto cell = [](float c) {
+    return static_cast<uint32_t>(std::clamp((c + 1.f) * 511.5f, 0.f, 1023.f));
+  };
   return spread_bits(cell(p[0])) | (spread_bits(cell(p[1])) << 1) | (spread_bits(cell(p[2])) << 2);
 }
 
@@ -40,7 +42,8 @@ void reorder_by_morton(TriangleMesh& mesh) {
   std::vector<uint32_t> codes(count), order(count), new_index(count);
   for (size_t v = 0; v < count; ++v) codes[v] = morton_code(&mesh.positions[3 * v]);
   std::iota(order.begin(), order.end(), 0u);
-  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return codes[a] < codes[b]; });
+  std::stable_sort(order.begin(), order.end(),
+                   [&](uint32_t a, uint32_t b) { return codes[a] < codes[b]; });
   std::vector<float> positions(mesh.positions.size());
   for (size_t i = 0; i < count; ++i) {
     new_index[order[i]] = static_cast<uint32_t>(i);
@@ -54,14 +57,24 @@ void reorder_by_morton(TriangleMesh& mesh) {
 
 TriangleMesh make_geodesic_sphere(uint32_t target_faces) {
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  const std::array<Vec, 12> corners = {{{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0},
-                                        {0, -1, t}, {0, 1, t}, {0, -1, -t}, {0, 1, -t},
-                                        {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}}};
-  const std::array<std::array<uint32_t, 3>, 20> faces = {{{0, 11, 5}, {0, 5, 1}, {0, 1, 7},
-      {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
-      {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8}, {3, 8, 9}, {4, 9, 5}, {2, 4, 11},
-      {6, 2, 10}, {8, 6, 7}, {9, 8, 1}}};
-  const uint32_t n = std::max<uint32_t>(1, static_cast<uint32_t>(std::lround(std::sqrt(target_faces / 20.0))));
+  const std::array<Vec, 12> corners = {{{-1, t, 0},
+                                        {1, t, 0},
+                                        {-1, -t, 0},
+                                        {1, -t, 0},
+                                        {0, -1, t},
+                                        {0, 1, t},
+                                        {0, -1, -t},
+                                        {0, 1, -t},
+                                        {t, 0, -1},
+                                        {t, 0, 1},
+                                        {-t, 0, -1},
+                                        {-t, 0, 1}}};
+  const std::array<std::array<uint32_t, 3>, 20> faces = {
+      {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+       {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+       {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}}};
+  const uint32_t n =
+      std::max<uint32_t>(1, static_cast<uint32_t>(std::lround(std::sqrt(target_faces / 20.0))));
 
   TriangleMesh mesh;
   std::unordered_map<uint64_t, uint32_t> index_of;  // build time only
@@ -69,7 +82,8 @@ TriangleMesh make_geodesic_sphere(uint32_t target_faces) {
   // A shared vertex must get one index and one position whichever face reaches it first, so
   // corners and edge points are keyed and placed from their canonical (lower corner first) form.
   auto vertex = [&](uint64_t key, const Vec& where) {
-    auto [it, inserted] = index_of.try_emplace(key, static_cast<uint32_t>(mesh.positions.size() / 3));
+    auto [it, inserted] =
+        index_of.try_emplace(key, static_cast<uint32_t>(mesh.positions.size() / 3));
     if (inserted) {
       const Vec p = normalised(where);
       for (double c : p) mesh.positions.push_back(static_cast<float>(c));
@@ -98,9 +112,11 @@ TriangleMesh make_geodesic_sphere(uint32_t target_faces) {
     };
     for (uint32_t i = 0; i < n; ++i)
       for (uint32_t j = 0; i + j < n; ++j) {
-        mesh.triangles.insert(mesh.triangles.end(), {point(i, j), point(i + 1, j), point(i, j + 1)});
+        mesh.triangles.insert(mesh.triangles.end(),
+                              {point(i, j), point(i + 1, j), point(i, j + 1)});
         if (i + j + 1 < n)
-          mesh.triangles.insert(mesh.triangles.end(), {point(i + 1, j), point(i + 1, j + 1), point(i, j + 1)});
+          mesh.triangles.insert(mesh.triangles.end(),
+                                {point(i + 1, j), point(i + 1, j + 1), point(i, j + 1)});
       }
   }
   reorder_by_morton(mesh);

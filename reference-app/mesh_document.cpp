@@ -170,7 +170,8 @@ void MeshDocument::build_topology() {
   // Triangles around each vertex, in increasing triangle order (a counting sort).
   vertex_triangle_offsets.assign(vertex_count_ + 1, 0);
   for (uint32_t v : triangles) ++vertex_triangle_offsets[v + 1];
-  for (uint32_t v = 0; v < vertex_count_; ++v) vertex_triangle_offsets[v + 1] += vertex_triangle_offsets[v];
+  for (uint32_t v = 0; v < vertex_count_; ++v)
+    vertex_triangle_offsets[v + 1] += vertex_triangle_offsets[v];
   vertex_triangles.resize(triangles.size());
   std::vector<uint32_t> fill(vertex_triangle_offsets.begin(), vertex_triangle_offsets.end() - 1);
   for (size_t i = 0; i < triangles.size(); ++i)

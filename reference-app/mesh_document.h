@@ -53,7 +53,7 @@ class MeshDocument {
   std::vector<MeshChannel> channels;
   std::vector<float> normals;
   int albedo = -1, metallic = -1, roughness = -1;  // channel indices
-  std::string label;  // file name or "built-in sphere"
+  std::string label;                               // file name or "built-in sphere"
 
   // Topology (compressed rows): the triangles around each vertex and its neighbours.
   std::vector<uint32_t> vertex_triangle_offsets, vertex_triangles;

@@ -75,7 +75,8 @@ ParseResult parse_options(int argc, char** argv) {
       if (!value(v) || !parse_number(v, options.bench_frames) || options.bench_frames == 0)
         return fail("--bench-frames needs a positive count");
     } else if (arg == "--bench-warmup") {
-      if (!value(v) || !parse_number(v, options.bench_warmup_seconds) || options.bench_warmup_seconds < 0)
+      if (!value(v) || !parse_number(v, options.bench_warmup_seconds) ||
+          options.bench_warmup_seconds < 0)
         return fail("--bench-warmup needs a number of seconds");
     } else if (arg == "--sphere-faces") {
       if (!value(v) || !parse_number(v, options.sphere_faces) || options.sphere_faces < 20)
@@ -100,6 +101,7 @@ ParseResult parse_options(int argc, char** argv) {
     const char* user = std::getenv("USER");
     options.name = user && *user && std::strlen(user) <= kMaxName ? user : "artist";
   }
-  if (options.host && !options.join_invite.empty()) return fail("--host and --join exclude each other");
+  if (options.host && !options.join_invite.empty())
+    return fail("--host and --join exclude each other");
   return {options, "", 0};
 }

@@ -14,7 +14,7 @@ struct AppOptions {
   std::string save_path;
   std::string screenshot_path;
   std::optional<double> exit_after_seconds;
-  uint32_t bench_frames = 0;  // 0: no benchmark
+  uint32_t bench_frames = 0;        // 0: no benchmark
   double bench_warmup_seconds = 0;  // untimed frames first (e.g. while peers join)
   uint32_t sphere_faces = 160000;
   int width = 1280;

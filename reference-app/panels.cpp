@@ -20,9 +20,12 @@ void section(const char* title) {
 
 const char* peer_state_name(SessionLink::PeerState state) {
   switch (state) {
-    case SessionLink::PeerState::live: return "live";
-    case SessionLink::PeerState::evasive: return "evasive";
-    case SessionLink::PeerState::left: return "left";
+    case SessionLink::PeerState::live:
+      return "live";
+    case SessionLink::PeerState::evasive:
+      return "evasive";
+    case SessionLink::PeerState::left:
+      return "left";
   }
   return "?";
 }
@@ -33,8 +36,9 @@ void draw_peer(const SessionLink::Peer& peer) {
   if (peer.latency_ms >= 0) std::snprintf(latency, sizeof latency, "%.1f ms", peer.latency_ms);
   ImGui::BulletText("%s  %016llx", peer.name.empty() ? "?" : peer.name.c_str(),
                     static_cast<unsigned long long>(peer.id));
-  ImGui::Text("    %s%s  version %llu  rtt %s", peer_state_name(peer.state), peer.merger ? " (merger)" : "",
-              static_cast<unsigned long long>(peer.version), latency);
+  ImGui::Text("    %s%s  version %llu  rtt %s", peer_state_name(peer.state),
+              peer.merger ? " (merger)" : "", static_cast<unsigned long long>(peer.version),
+              latency);
 }
 
 }  // namespace
@@ -48,7 +52,8 @@ void App::draw_panels() {
 void App::draw_tool_panel() {
   ImGui::SetNextWindowPos(ImVec2(kMargin, kMargin), ImGuiCond_Always);
   ImGui::SetNextWindowSize(ImVec2(kPanelWidth, 0.f), ImGuiCond_Always);
-  ImGui::Begin("cSculpt", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
+  ImGui::Begin("cSculpt", nullptr,
+               ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
   ImGui::TextWrapped("%s", document_.label.c_str());
   ImGui::Text("%u vertices  %u faces", document_.vertex_count(), document_.triangle_count());
   if (!error_.empty()) {
@@ -61,12 +66,14 @@ void App::draw_tool_panel() {
   section("Brush");
   for (size_t i = 0; i < kBrushNames.size(); ++i) {
     if (i % 3 != 0) ImGui::SameLine();
-    if (ImGui::RadioButton(kBrushNames[i], brush_.kind == static_cast<BrushKind>(i))) brush_.kind = static_cast<BrushKind>(i);
+    if (ImGui::RadioButton(kBrushNames[i], brush_.kind == static_cast<BrushKind>(i)))
+      brush_.kind = static_cast<BrushKind>(i);
   }
   ImGui::SliderFloat("Radius px", &brush_.radius_pixels, 4.f, 400.f, "%.0f");
   ImGui::SliderFloat("Strength", &brush_.strength, 0.f, 1.f, "%.2f");
   int falloff = static_cast<int>(brush_.falloff);
-  if (ImGui::Combo("Falloff", &falloff, kFalloffNames.data(), static_cast<int>(kFalloffNames.size())))
+  if (ImGui::Combo("Falloff", &falloff, kFalloffNames.data(),
+                   static_cast<int>(kFalloffNames.size())))
     brush_.falloff = static_cast<Falloff>(falloff);
   ImGui::Checkbox("Invert (Ctrl)", &brush_.invert);
   ImGui::SameLine();
@@ -87,7 +94,8 @@ void App::draw_tool_panel() {
 
   section("Paint");
   int channel = static_cast<int>(brush_.paint_channel);
-  if (ImGui::Combo("Channel", &channel, kPaintChannelNames.data(), static_cast<int>(kPaintChannelNames.size())))
+  if (ImGui::Combo("Channel", &channel, kPaintChannelNames.data(),
+                   static_cast<int>(kPaintChannelNames.size())))
     brush_.paint_channel = static_cast<PaintChannel>(channel);
   ImGui::ColorEdit3("Colour", &brush_.colour.x);
   ImGui::SliderFloat("Roughness", &brush_.roughness, 0.f, 1.f, "%.2f");
@@ -118,9 +126,12 @@ void App::draw_tool_panel() {
   ImGui::InputText("##path", path_text_.data(), path_text_.size());
   if (ImGui::Button("Open")) {
     std::string error;
-    if (session_.active()) error_ = "Leave the session before opening another mesh.";
-    else if (document_.load(path_text_.data(), error)) layout_changed(), error_.clear();
-    else report(error);
+    if (session_.active())
+      error_ = "Leave the session before opening another mesh.";
+    else if (document_.load(path_text_.data(), error))
+      layout_changed(), error_.clear();
+    else
+      report(error);
   }
   ImGui::SameLine();
   if (ImGui::Button("Save")) {
@@ -138,8 +149,8 @@ void App::draw_tool_panel() {
         "Ctrl+Z / Ctrl+Shift+Z undo / redo (your own strokes, also in a session)");
   }
   ImGui::Text("%.1f fps", ImGui::GetIO().Framerate);
-  panel_rects_.push_back({ImGui::GetWindowPos().x, ImGui::GetWindowPos().y, ImGui::GetWindowSize().x,
-                          ImGui::GetWindowSize().y});
+  panel_rects_.push_back({ImGui::GetWindowPos().x, ImGui::GetWindowPos().y,
+                          ImGui::GetWindowSize().x, ImGui::GetWindowSize().y});
   ImGui::End();
 }
 
@@ -147,7 +158,8 @@ void App::draw_session_panel() {
   const float x = ImGui::GetIO().DisplaySize.x - kPanelWidth - kMargin;
   ImGui::SetNextWindowPos(ImVec2(x, kMargin), ImGuiCond_Always);
   ImGui::SetNextWindowSize(ImVec2(kPanelWidth, 0.f), ImGuiCond_Always);
-  ImGui::Begin("Session", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
+  ImGui::Begin("Session", nullptr,
+               ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
   ImGui::TextWrapped("Status: %s", session_.status().c_str());
   if (session_.joining()) {
     ImGui::TextWrapped("Waiting for the session's mesh...");
@@ -168,8 +180,10 @@ void App::draw_session_panel() {
     ImGui::Text("me %016llx", static_cast<unsigned long long>(session_.id()));
     ImGui::Text("merger %016llx%s", static_cast<unsigned long long>(stats.merger),
                 stats.merger == session_.id() ? " (me)" : "");
-    ImGui::Text("version %llu  members %u", static_cast<unsigned long long>(session_.version()), stats.members);
-    ImGui::Text("strokes sent %llu, merged %llu", static_cast<unsigned long long>(stats.strokes_submitted),
+    ImGui::Text("version %llu  members %u", static_cast<unsigned long long>(session_.version()),
+                stats.members);
+    ImGui::Text("strokes sent %llu, merged %llu",
+                static_cast<unsigned long long>(stats.strokes_submitted),
                 static_cast<unsigned long long>(stats.strokes_acknowledged));
     ImGui::Text("sent %.1f KB  merges %llu (%.1f ms)", double(stats.submit_bytes) / 1024.0,
                 static_cast<unsigned long long>(stats.merges), stats.merge_ms_mean);
@@ -177,15 +191,18 @@ void App::draw_session_panel() {
     bool attribution = attribution_view_;
     if (ImGui::Checkbox("Attribution view (A)", &attribution)) toggle_attribution_view();
   }
-  for (const std::string& message : session_.messages()) ImGui::TextWrapped("- %s", message.c_str());
-  panel_rects_.push_back({ImGui::GetWindowPos().x, ImGui::GetWindowPos().y, ImGui::GetWindowSize().x,
-                          ImGui::GetWindowSize().y});
+  for (const std::string& message : session_.messages())
+    ImGui::TextWrapped("- %s", message.c_str());
+  panel_rects_.push_back({ImGui::GetWindowPos().x, ImGui::GetWindowPos().y,
+                          ImGui::GetWindowSize().x, ImGui::GetWindowSize().y});
   ImGui::End();
 }
 
 void App::draw_brush_cursor() {
   if (over_panel(cursor_x_, cursor_y_)) return;
   const float radius = brush_.radius_pixels * (brush_.pressure_radius ? pressure_ : 1.f);
-  const ImU32 colour = brush_.kind == BrushKind::paint ? IM_COL32(255, 200, 120, 200) : IM_COL32(255, 255, 255, 160);
-  ImGui::GetForegroundDrawList()->AddCircle(ImVec2(float(cursor_x_), float(cursor_y_)), radius, colour, 48, 1.5f);
+  const ImU32 colour =
+      brush_.kind == BrushKind::paint ? IM_COL32(255, 200, 120, 200) : IM_COL32(255, 255, 255, 160);
+  ImGui::GetForegroundDrawList()->AddCircle(ImVec2(float(cursor_x_), float(cursor_y_)), radius,
+                                            colour, 48, 1.5f);
 }

@@ -129,18 +129,20 @@ void Renderer::upload_all(const MeshDocument& document) {
   auto channel_data = [&](int index) {
     return index >= 0 ? document.channels[index].values.data() : constant_.data();
   };
-  const float* data[kAttributeCount] = {document.positions.data(), document.normals.data(),
-                                        channel_data(document.albedo), channel_data(document.roughness),
-                                        channel_data(document.metallic)};
+  const float* data[kAttributeCount] = {
+      document.positions.data(), document.normals.data(), channel_data(document.albedo),
+      channel_data(document.roughness), channel_data(document.metallic)};
   const size_t widths[kAttributeCount] = {3, 3, 3, 1, 1};
   for (int a = 0; a < kAttributeCount; ++a) {
     glBindBuffer(GL_ARRAY_BUFFER, buffers_[a]);
-    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertex_count_ * widths[a] * sizeof(float)), data[a],
+    glBufferData(GL_ARRAY_BUFFER,
+                 static_cast<GLsizeiptr>(vertex_count_ * widths[a] * sizeof(float)), data[a],
                  GL_DYNAMIC_DRAW);
   }
   glBindVertexArray(vao_);
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, index_buffer_);
-  glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(document.triangles.size() * sizeof(uint32_t)),
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+               static_cast<GLsizeiptr>(document.triangles.size() * sizeof(uint32_t)),
                document.triangles.data(), GL_STATIC_DRAW);
   glBindVertexArray(0);
   index_count_ = static_cast<GLsizei>(document.triangles.size());
@@ -154,7 +156,9 @@ void Renderer::upload_range(const MeshDocument& document, uint32_t first, uint32
     glBufferSubData(GL_ARRAY_BUFFER, static_cast<GLintptr>(first * width * sizeof(float)),
                     static_cast<GLsizeiptr>(count * width * sizeof(float)), values + first * width);
   };
-  auto channel = [&](int index) { return index >= 0 ? document.channels[index].values.data() : nullptr; };
+  auto channel = [&](int index) {
+    return index >= 0 ? document.channels[index].values.data() : nullptr;
+  };
   upload(kPosition, document.positions.data(), 3);
   upload(kNormal, document.normals.data(), 3);
   upload(kAlbedo, channel(document.albedo), 3);
@@ -180,13 +184,18 @@ void Renderer::upload_vertices(const MeshDocument& document, std::vector<uint32_
 
 void Renderer::upload_colour_override(std::span<const float> rgb) {
   glBindBuffer(GL_ARRAY_BUFFER, buffers_[kAlbedo]);
-  glBufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(rgb.size() * sizeof(float)), rgb.data());
+  glBufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(rgb.size() * sizeof(float)),
+                  rgb.data());
 }
 
-void Renderer::draw(const glm::mat4& view, const glm::mat4& projection, const ViewSettings& settings) {
+void Renderer::draw(const glm::mat4& view, const glm::mat4& projection,
+                    const ViewSettings& settings) {
   if (index_count_ == 0) return;
   glEnable(GL_DEPTH_TEST);
-  if (settings.backface_culling) glEnable(GL_CULL_FACE); else glDisable(GL_CULL_FACE);
+  if (settings.backface_culling)
+    glEnable(GL_CULL_FACE);
+  else
+    glDisable(GL_CULL_FACE);
   glCullFace(GL_BACK);
   glUseProgram(program_);
   glUniformMatrix4fv(u_view_, 1, GL_FALSE, glm::value_ptr(view));

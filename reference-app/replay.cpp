@@ -44,10 +44,14 @@ bool ReplayPlayer::load(const std::string& path, std::string& error) {
     bool ok = true;
     auto read_mods = [&] {
       for (std::string mod; words >> mod;) {
-        if (mod == "shift") e.mods |= GLFW_MOD_SHIFT;
-        else if (mod == "ctrl") e.mods |= GLFW_MOD_CONTROL;
-        else if (mod == "alt") e.mods |= GLFW_MOD_ALT;
-        else ok = false;
+        if (mod == "shift")
+          e.mods |= GLFW_MOD_SHIFT;
+        else if (mod == "ctrl")
+          e.mods |= GLFW_MOD_CONTROL;
+        else if (mod == "alt")
+          e.mods |= GLFW_MOD_ALT;
+        else
+          ok = false;
       }
     };
     if (verb == "move") {
@@ -57,8 +61,10 @@ bool ReplayPlayer::load(const std::string& path, std::string& error) {
       e.kind = verb == "press" ? Kind::press : Kind::release;
       std::string button;
       words >> button;
-      e.code = button == "left" ? GLFW_MOUSE_BUTTON_LEFT : button == "right" ? GLFW_MOUSE_BUTTON_RIGHT
-               : button == "middle" ? GLFW_MOUSE_BUTTON_MIDDLE : -1;
+      e.code = button == "left"     ? GLFW_MOUSE_BUTTON_LEFT
+               : button == "right"  ? GLFW_MOUSE_BUTTON_RIGHT
+               : button == "middle" ? GLFW_MOUSE_BUTTON_MIDDLE
+                                    : -1;
       ok = e.code >= 0;
       read_mods();
     } else if (verb == "key" || verb == "keydown" || verb == "keyup") {
@@ -111,20 +117,40 @@ void ReplayPlayer::step(InputHandlers& input) {
   while (next_ < events_.size()) {
     const Event& e = events_[next_++];
     switch (e.kind) {
-      case Kind::move: input.on_cursor(e.x, e.y); break;
-      case Kind::press: input.on_button(e.code, GLFW_PRESS, e.mods); break;
-      case Kind::release: input.on_button(e.code, GLFW_RELEASE, e.mods); break;
+      case Kind::move:
+        input.on_cursor(e.x, e.y);
+        break;
+      case Kind::press:
+        input.on_button(e.code, GLFW_PRESS, e.mods);
+        break;
+      case Kind::release:
+        input.on_button(e.code, GLFW_RELEASE, e.mods);
+        break;
       case Kind::key:
         input.on_key(e.code, GLFW_PRESS, e.mods);
         input.on_key(e.code, GLFW_RELEASE, e.mods);
         break;
-      case Kind::key_down: input.on_key(e.code, GLFW_PRESS, e.mods); break;
-      case Kind::key_up: input.on_key(e.code, GLFW_RELEASE, e.mods); break;
-      case Kind::pressure: input.on_pressure(static_cast<float>(e.x)); break;
-      case Kind::scroll: input.on_scroll(e.y); break;
-      case Kind::wait: waiting_ = e.code; return;
-      case Kind::wait_session: waiting_for_session_ = true; return;
-      case Kind::wait_version: waiting_for_version_ = static_cast<unsigned long long>(e.code); return;
+      case Kind::key_down:
+        input.on_key(e.code, GLFW_PRESS, e.mods);
+        break;
+      case Kind::key_up:
+        input.on_key(e.code, GLFW_RELEASE, e.mods);
+        break;
+      case Kind::pressure:
+        input.on_pressure(static_cast<float>(e.x));
+        break;
+      case Kind::scroll:
+        input.on_scroll(e.y);
+        break;
+      case Kind::wait:
+        waiting_ = e.code;
+        return;
+      case Kind::wait_session:
+        waiting_for_session_ = true;
+        return;
+      case Kind::wait_version:
+        waiting_for_version_ = static_cast<unsigned long long>(e.code);
+        return;
     }
   }
 }

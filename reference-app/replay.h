@@ -24,13 +24,26 @@ class ReplayPlayer {
   void step(InputHandlers& input);
   bool active() const { return loaded_ && !finished(); }
   bool finished() const {
-    return next_ >= events_.size() && waiting_ == 0 && !waiting_for_session_ && waiting_for_version_ == 0;
+    return next_ >= events_.size() && waiting_ == 0 && !waiting_for_session_ &&
+           waiting_for_version_ == 0;
   }
   bool loaded() const { return loaded_; }
   bool waiting_for_session() const { return waiting_for_session_; }
 
  private:
-  enum class Kind { move, press, release, key, key_down, key_up, pressure, scroll, wait, wait_session, wait_version };
+  enum class Kind {
+    move,
+    press,
+    release,
+    key,
+    key_down,
+    key_up,
+    pressure,
+    scroll,
+    wait,
+    wait_session,
+    wait_version
+  };
   struct Event {
     Kind kind;
     double x = 0, y = 0;

@@ -63,8 +63,8 @@ std::span<const glm::vec3> Sculptor::mirrors(const BrushSettings& settings) {
   return mirrors_;
 }
 
-void Sculptor::gather_region(glm::vec3 center, float radius, glm::vec3 view_direction, bool front_only,
-                             Falloff falloff) {
+void Sculptor::gather_region(glm::vec3 center, float radius, glm::vec3 view_direction,
+                             bool front_only, Falloff falloff) {
   region_.clear();
   const uint32_t stamp = next_stamp(region_stamp_, region_epoch_);
   bvh_.for_each_triangle_near(center, radius, [&](uint32_t t) {
@@ -82,7 +82,8 @@ void Sculptor::gather_region(glm::vec3 center, float radius, glm::vec3 view_dire
   });
   // The BVH visits leaves in an order that depends on the refits; sorting makes every result
   // (sums, undo records) independent of it.
-  std::sort(region_.begin(), region_.end(), [](const RegionVertex& a, const RegionVertex& b) { return a.vertex < b.vertex; });
+  std::sort(region_.begin(), region_.end(),
+            [](const RegionVertex& a, const RegionVertex& b) { return a.vertex < b.vertex; });
 }
 
 void Sculptor::dab(const DabInput& input, const BrushSettings& settings) {
@@ -92,15 +93,16 @@ void Sculptor::dab(const DabInput& input, const BrushSettings& settings) {
     const float parity = m.x * m.y * m.z;  // a reflection turns a twist the other way
     DabInput mirrored = input;
     mirrored.view_direction = input.view_direction * m;
-    gather_region(input.center * m, input.radius, mirrored.view_direction, settings.front_faces_only,
-                  settings.falloff);
+    gather_region(input.center * m, input.radius, mirrored.view_direction,
+                  settings.front_faces_only, settings.falloff);
     apply(mirrored, settings, input.center * m, parity);
     last_dab_vertices_ += static_cast<uint32_t>(region_.size());
   }
   refresh_after_change(changed_, input.kind != BrushKind::paint);
 }
 
-void Sculptor::apply(const DabInput& input, const BrushSettings& settings, glm::vec3 center, float parity) {
+void Sculptor::apply(const DabInput& input, const BrushSettings& settings, glm::vec3 center,
+                     float parity) {
   if (region_.empty()) return;
   for (const RegionVertex& r : region_) {
     history_.touch(document_, r.vertex);
@@ -116,14 +118,16 @@ void Sculptor::apply(const DabInput& input, const BrushSettings& settings, glm::
         const float t = std::min(1.f, s * r.weight);
         float* value = &channel.values[size_t{r.vertex} * width];
         for (uint32_t c = 0; c < width; ++c)
-          value[c] = std::clamp(value[c] + (target[c] - value[c]) * t, channel.min_value, channel.max_value);
+          value[c] = std::clamp(value[c] + (target[c] - value[c]) * t, channel.min_value,
+                                channel.max_value);
       }
     };
     // Invert paints the complement (1 - colour, 1 - value): a quick way back to light/rough.
     auto pick = [&](float v) { return input.invert ? 1.f - v : v; };
     switch (settings.paint_channel) {
       case PaintChannel::albedo: {
-        const float colour[3] = {pick(settings.colour.r), pick(settings.colour.g), pick(settings.colour.b)};
+        const float colour[3] = {pick(settings.colour.r), pick(settings.colour.g),
+                                 pick(settings.colour.b)};
         paint(document_.albedo, colour, 3);
         break;
       }
@@ -158,7 +162,8 @@ void Sculptor::apply(const DabInput& input, const BrushSettings& settings, glm::
     for (size_t i = 0; i < region_.size(); ++i) {
       const uint32_t v = region_[i].vertex;
       glm::vec3 mean(0.f);
-      const uint32_t begin = document_.neighbour_offsets[v], end = document_.neighbour_offsets[v + 1];
+      const uint32_t begin = document_.neighbour_offsets[v],
+                     end = document_.neighbour_offsets[v + 1];
       for (uint32_t k = begin; k < end; ++k) mean += position(document_.neighbours[k]);
       targets_[i] = end > begin ? mean / float(end - begin) : position(v);
     }
@@ -177,7 +182,9 @@ void Sculptor::apply(const DabInput& input, const BrushSettings& settings, glm::
       return t * std::min(1.f, rate * s * w);
     };
     switch (input.kind) {
-      case BrushKind::draw: p += area_normal * (sign * depth * w); break;
+      case BrushKind::draw:
+        p += area_normal * (sign * depth * w);
+        break;
       case BrushKind::inflate: {
         const float* n = &document_.normals[3 * size_t{r.vertex}];
         p += glm::vec3(n[0], n[1], n[2]) * (sign * depth * w);
@@ -189,11 +196,14 @@ void Sculptor::apply(const DabInput& input, const BrushSettings& settings, glm::
       case BrushKind::crease:  // a sharp groove (or ridge when inverted) that pinches its walls in
         p += -area_normal * (sign * depth * w * w) + toward_centre(0.5f * kPinchRate);
         break;
-      case BrushKind::pinch: p += toward_centre(kPinchRate) * sign; break;
+      case BrushKind::pinch:
+        p += toward_centre(kPinchRate) * sign;
+        break;
       case BrushKind::twist:
         p = center + rotate_about(p - center, area_normal, sign * parity * kTwistRadians * s * w);
         break;
-      default: break;
+      default:
+        break;
     }
     set_position(r.vertex, p);
   }
@@ -202,11 +212,12 @@ void Sculptor::apply(const DabInput& input, const BrushSettings& settings, glm::
 void Sculptor::grab_begin(const DabInput& input, const BrushSettings& settings) {
   grab_entries_.clear();
   for (const glm::vec3& m : mirrors(settings)) {
-    gather_region(input.center * m, input.radius, input.view_direction * m, settings.front_faces_only,
-                  settings.falloff);
+    gather_region(input.center * m, input.radius, input.view_direction * m,
+                  settings.front_faces_only, settings.falloff);
     for (const RegionVertex& r : region_) {
       history_.touch(document_, r.vertex);
-      grab_entries_.push_back({r.vertex, r.weight * std::min(1.f, 2.f * input.strength), m, position(r.vertex)});
+      grab_entries_.push_back(
+          {r.vertex, r.weight * std::min(1.f, 2.f * input.strength), m, position(r.vertex)});
     }
   }
 }
@@ -239,7 +250,8 @@ void Sculptor::refresh_after_change(std::span<const uint32_t> vertices, bool pos
   changed_triangles_.clear();
   normal_vertices_.clear();
   for (uint32_t v : vertices)
-    for (uint32_t k = document_.vertex_triangle_offsets[v]; k < document_.vertex_triangle_offsets[v + 1]; ++k) {
+    for (uint32_t k = document_.vertex_triangle_offsets[v];
+         k < document_.vertex_triangle_offsets[v + 1]; ++k) {
       const uint32_t t = document_.vertex_triangles[k];
       if (triangle_stamp_[t] == triangle_stamp) continue;
       triangle_stamp_[t] = triangle_stamp;

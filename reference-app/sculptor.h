@@ -56,7 +56,8 @@ class Sculptor {
     glm::vec3 mirror;  // the symmetry's sign per axis
     glm::vec3 original;
   };
-  void gather_region(glm::vec3 center, float radius, glm::vec3 view_direction, bool front_only, Falloff falloff);
+  void gather_region(glm::vec3 center, float radius, glm::vec3 view_direction, bool front_only,
+                     Falloff falloff);
   void apply(const DabInput& input, const BrushSettings& settings, glm::vec3 center, float parity);
   std::span<const glm::vec3> mirrors(const BrushSettings& settings);
   uint32_t next_stamp(std::vector<uint32_t>& stamps, uint32_t& epoch);

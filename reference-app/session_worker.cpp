@@ -158,8 +158,7 @@ void SessionWorker::settle(int timeout_ms) {
       std::lock_guard lock(mutex_);
       // An outbox is published after the submit of the same loop: including every command
       // handed means they are all sent too.
-      if (state_ != 1 || (outbox_ && outbox_->includes >= inbox_.handed))
-        return;
+      if (state_ != 1 || (outbox_ && outbox_->includes >= inbox_.handed)) return;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }
@@ -239,8 +238,10 @@ void SessionWorker::drain_inbox() {
         shown_.write(c.changes->vertices[i], &c.changes->values[i * stride]);
       continue;
     }
-    if (c.kind == Command::Kind::stroke) apply_stroke(c);
-    else apply_step(c.kind == Command::Kind::redo);
+    if (c.kind == Command::Kind::stroke)
+      apply_stroke(c);
+    else
+      apply_step(c.kind == Command::Kind::redo);
     ++done_;
     dirty_ = true;
   }
@@ -269,7 +270,8 @@ void SessionWorker::apply_stroke(const Command& c) {
   }
   const csc_vertex_arrays a = mirror_.view();
   const uint32_t count = static_cast<uint32_t>(c.vertices.size());
-  if (csc_status s = csc_session_record_stroke(session_, &a, c.vertices.data(), count, recorded.data());
+  if (csc_status s =
+          csc_session_record_stroke(session_, &a, c.vertices.data(), count, recorded.data());
       s != CSC_OK)
     note(abi_error("cannot keep the stroke for undo", s));
   unsent_vertices_.insert(unsent_vertices_.end(), c.vertices.begin(), c.vertices.end());
@@ -309,7 +311,7 @@ void SessionWorker::sync() {
       note(abi_error("cannot send the stroke", s));
     strokes_unsent_ = 0;
     unsent_vertices_.clear();
-    dirty_ = true;  // submit sets the values to what the peers receive
+    dirty_ = true;   // submit sets the values to what the peers receive
     refresh_view();  // the counters the resubmission above reads
   }
 }
@@ -325,19 +327,36 @@ bool SessionWorker::poll_events() {
     const std::string peer = std::string("peer ") + id;
     const std::string message = event.message ? event.message : "";
     switch (event.kind) {
-      case CSC_EVENT_JOINED: local_view_.status = "live"; break;
-      case CSC_EVENT_VERSION: version_pending = true; break;
-      case CSC_EVENT_PEER_JOINED: note(peer + " joined"); break;
-      case CSC_EVENT_PEER_EVASIVE: note(peer + " is silent"); break;
-      case CSC_EVENT_PEER_LEFT: note(peer + " left"); break;
-      case CSC_EVENT_PEER_LIVE: note(peer + " is back"); break;
-      case CSC_EVENT_MERGER_CHANGED: note(peer + " merges now"); break;
-      case CSC_EVENT_DROPPED: note("dropped a message: " + message); break;
+      case CSC_EVENT_JOINED:
+        local_view_.status = "live";
+        break;
+      case CSC_EVENT_VERSION:
+        version_pending = true;
+        break;
+      case CSC_EVENT_PEER_JOINED:
+        note(peer + " joined");
+        break;
+      case CSC_EVENT_PEER_EVASIVE:
+        note(peer + " is silent");
+        break;
+      case CSC_EVENT_PEER_LEFT:
+        note(peer + " left");
+        break;
+      case CSC_EVENT_PEER_LIVE:
+        note(peer + " is back");
+        break;
+      case CSC_EVENT_MERGER_CHANGED:
+        note(peer + " merges now");
+        break;
+      case CSC_EVENT_DROPPED:
+        note("dropped a message: " + message);
+        break;
       case CSC_EVENT_ERROR:
         local_view_.status = "network error";
         note("network error: " + message);
         break;
-      default: break;
+      default:
+        break;
     }
     if (event.kind >= CSC_EVENT_PEER_JOINED && event.kind <= CSC_EVENT_MERGER_CHANGED)
       last_view_ = {};  // show a change of the peers at once
@@ -363,8 +382,8 @@ void SessionWorker::refresh_view() {
       const auto state = info.state == CSC_PEER_LEFT      ? SessionView::PeerState::left
                          : info.state == CSC_PEER_EVASIVE ? SessionView::PeerState::evasive
                                                           : SessionView::PeerState::live;
-      v.peers.push_back({info.id, state, info.name ? info.name : "", info.merger != 0,
-                         info.version, info.latency_ms});
+      v.peers.push_back({info.id, state, info.name ? info.name : "", info.merger != 0, info.version,
+                         info.latency_ms});
     }
   v.cursors.clear();
   if (csc_session_presence_count(session_, &count) == CSC_OK)
@@ -374,8 +393,11 @@ void SessionWorker::refresh_view() {
           p.age_ms > kStaleCursorMs)
         continue;
       presence_seen_.insert(p.peer);
-      v.cursors.push_back({p.peer, {p.position[0], p.position[1], p.position[2]}, p.radius,
-                           p.active != 0, {p.colour[0], p.colour[1], p.colour[2]}});
+      v.cursors.push_back({p.peer,
+                           {p.position[0], p.position[1], p.position[2]},
+                           p.radius,
+                           p.active != 0,
+                           {p.colour[0], p.colour[1], p.colour[2]}});
     }
   v.presence_seen = presence_seen_.size();
 }

@@ -140,7 +140,7 @@ class SessionWorker {
   MeshArrays mirror_, shown_;  // the session's side; what the UI's document holds
   uint32_t strokes_unsent_ = 0;
   std::vector<uint32_t> unsent_vertices_;  // the strokes' since the last submit (may repeat)
-  uint64_t done_ = 0;  // strokes, undos and redos applied to the mirror
+  uint64_t done_ = 0;                      // strokes, undos and redos applied to the mirror
   bool dirty_ = true, attribution_stale_ = true;
   std::chrono::steady_clock::time_point last_submit_{}, last_view_{};
   std::set<uint64_t> presence_seen_;

@@ -49,7 +49,8 @@ void TabletPressure::X::find_pens() {
     for (int c = 0; c < info.num_classes; ++c) {
       if (info.classes[c]->type != XIValuatorClass) continue;
       const auto* v = reinterpret_cast<const XIValuatorClassInfo*>(info.classes[c]);
-      if (v->label == pressure && v->max > v->min) pens.push_back({info.deviceid, v->number, v->min, v->max});
+      if (v->label == pressure && v->max > v->min)
+        pens.push_back({info.deviceid, v->number, v->min, v->max});
     }
   }
   XIFreeDeviceInfo(devices);
@@ -92,7 +93,8 @@ bool TabletPressure::open(GLFWwindow* window, std::string& why) {
   XISetMask(bits, XI_ButtonPress);
   std::vector<XIEventMask> masks;
   for (const X::Pen& p : x->pens) masks.push_back({p.device, sizeof bits, bits});
-  XISelectEvents(x->display, glfwGetX11Window(window), masks.data(), static_cast<int>(masks.size()));
+  XISelectEvents(x->display, glfwGetX11Window(window), masks.data(),
+                 static_cast<int>(masks.size()));
   XFlush(x->display);
   x_ = std::move(x);
   return true;
@@ -109,7 +111,8 @@ std::optional<float> TabletPressure::poll() {
     XEvent event;
     XNextEvent(x_->display, &event);
     XGenericEventCookie& cookie = event.xcookie;
-    if (cookie.type != GenericEvent || cookie.extension != x_->opcode || !XGetEventData(x_->display, &cookie))
+    if (cookie.type != GenericEvent || cookie.extension != x_->opcode ||
+        !XGetEventData(x_->display, &cookie))
       continue;
     if (cookie.evtype == XI_Motion || cookie.evtype == XI_ButtonPress)
       if (auto p = x_->pressure_of(*static_cast<const XIDeviceEvent*>(cookie.data))) latest = p;

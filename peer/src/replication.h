@@ -82,9 +82,9 @@ class Replication {
  private:
   std::uint64_t version_ = 0;
   std::uint64_t chain_ = 0;
-  std::deque<VersionRecord> history_;                // the latest accepted, kHistoryBytes
-  std::size_t history_bytes_ = 0;                    // of history_'s diffs
-  std::deque<std::uint64_t> chains_;                 // at chains_first_, ..., version_
+  std::deque<VersionRecord> history_;  // the latest accepted, kHistoryBytes
+  std::size_t history_bytes_ = 0;      // of history_'s diffs
+  std::deque<std::uint64_t> chains_;   // at chains_first_, ..., version_
   std::uint64_t chains_first_ = 0;
   std::map<std::uint64_t, VersionRecord> buffered_;  // version -> arrived ahead of its turn
 };

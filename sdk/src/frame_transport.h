@@ -69,7 +69,7 @@ struct TransportScratch {
 void transport_positions(const Topology& topology, std::span<const Vec3f> base,
                          std::span<const std::uint32_t> vertices,
                          std::span<const TransportInput> users, bool same_once,
-                         TransportScratch& scratch,
-                         WorkerPool& pool, std::size_t grain, std::span<Vec3f> moved);
+                         TransportScratch& scratch, WorkerPool& pool, std::size_t grain,
+                         std::span<Vec3f> moved);
 
 }  // namespace csculpt::detail

@@ -645,7 +645,6 @@ struct MethodTraits {
   bool same_once = true;     // matching changes count once (SameChange::once)
 };
 
-
 MethodTraits traits(MergeMethod m) {
   switch (m) {
     // Channels need no rotation invariance, and counting intents already keeps a broad fill

@@ -5,9 +5,9 @@
 #include <memory>
 
 #include "csculpt/diff.h"
-#include "csculpt/testkit/generate.h"
 #include "csculpt/hierarchy.h"
 #include "csculpt/mesh.h"
+#include "csculpt/testkit/generate.h"
 
 namespace csculpt::peer::testing {
 

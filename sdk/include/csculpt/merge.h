@@ -67,7 +67,8 @@ struct MergeTimings {
   /// Faces the merge would have folded although no diff folds them, drawn back before the
   /// result was written (`full` only; see fold_repair.h).
   std::uint64_t new_folds_repaired = 0;
-  double fold_repair_ms = 0;  ///< looking for them (every merge) and repairing them (part of blend_ms)
+  double fold_repair_ms =
+      0;  ///< looking for them (every merge) and repairing them (part of blend_ms)
 };
 
 /// How a merge treats diffs that make the same change at a vertex.

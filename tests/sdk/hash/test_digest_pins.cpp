@@ -7,8 +7,8 @@
 #include <cstdint>
 
 #include "csculpt/diff.h"
-#include "csculpt/testkit/generate.h"
 #include "csculpt/hierarchy.h"
+#include "csculpt/testkit/generate.h"
 
 namespace {
 

@@ -932,8 +932,8 @@ TEST(MergeIdempotence, SameChangeAddAddsIdenticalEdits) {
       // twice the change in the channel's linear space, where channels merge
       const float b = to_linear(desc.linearisation, s.base.channels[c].values[i]);
       const float e = to_linear(desc.linearisation, a.channels[c].values[i]);
-      twice.channels[c].values[i] = std::clamp(from_linear(desc.linearisation, e + (e - b)),
-                                               desc.min_value, desc.max_value);
+      twice.channels[c].values[i] =
+          std::clamp(from_linear(desc.linearisation, e + (e - b)), desc.min_value, desc.max_value);
     }
   }
   Merger merger(s.hierarchy);
