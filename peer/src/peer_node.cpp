@@ -368,6 +368,7 @@ void PeerNode::on_snapshot_chunk(const fb::SnapshotChunk& c) {
     return dropped("snapshot of " + std::to_string(c.total()) + " bytes exceeds the limit");
   // A snapshot older than our version is only wanted when we asked for it (divergence).
   if (joined_ && c.version() < replication_.version() && !snapshot_requested_) return;
+  last_snapshot_chunk_ = Clock::now();
   if (!snapshot_.add(c.version(), c.chain(), c.offset(), c.total(),
                      {c.data()->data(), c.data()->size()}))
     return;
@@ -522,9 +523,22 @@ void PeerNode::check_divergence(PeerId merger, std::uint64_t version, std::uint6
   request_snapshot(merger);
 }
 
+/// One snapshot at a time: each request is answered with a whole snapshot of the sender's
+/// version of the moment, and a peer behind a merger that publishes every 10 ms asked once per
+/// version it received, so the answers' chunks interleaved and none ever completed. Asked
+/// again (from whoever is asked now) only when the last one has not come in kSnapshotRetry.
 void PeerNode::request_snapshot(PeerId from) {
+  const Clock::time_point now = Clock::now();
+  if (snapshot_requested_ && (now < next_snapshot_request_ || snapshot_flowing(now))) return;
+  next_snapshot_request_ = now + std::max(kSnapshotRetry, 4 * options_.membership.expired);
+  snapshot_.reset();
   snapshot_requested_ = true;
   send_to_peer(from, snapshot_request_message(header()));
+}
+
+/// Chunks of a snapshot have come lately: it is on its way.
+bool PeerNode::snapshot_flowing(Clock::time_point now) const {
+  return now - last_snapshot_chunk_ < kSnapshotRetry;
 }
 
 void PeerNode::send_snapshot(PeerId peer) {
@@ -562,7 +576,9 @@ void PeerNode::heartbeat(Clock::time_point now) {
     // Still joining: greet the inviter again until the snapshot arrives (not so often that a
     // large snapshot is sent twice while the first is on its way).
     if (now >= next_join_hello_) {
-      next_join_hello_ = now + std::max(Millis{2000}, 4 * options_.membership.expired);
+      next_join_hello_ = now + std::max(kSnapshotRetry, 4 * options_.membership.expired);
+      if (snapshot_flowing(now)) return;  // a large one on its way: not asked for twice
+      snapshot_.reset();                  // one that stopped coming is not finished
       transport_.send(joining_endpoint_, hello(true));
     }
     return;

@@ -33,6 +33,8 @@ namespace csculpt::peer {
 /// How long the endpoints of expired members are greeted (PeerNode::greet_lost): longer than
 /// the partitions a session heals from.
 constexpr Millis kGreetLostFor{10 * 60 * 1000};
+/// How long a snapshot asked for (or a joiner's) may take before it is asked for again.
+constexpr Millis kSnapshotRetry{2000};
 
 class PeerNode {
  public:
@@ -111,6 +113,7 @@ class PeerNode {
   void check_divergence(PeerId merger, std::uint64_t version, std::uint64_t chain,
                         Clock::time_point now);
   void request_snapshot(PeerId from);
+  bool snapshot_flowing(Clock::time_point now) const;
   void send_snapshot(PeerId peer);
 
   // the journal (peer_node_journal.cpp): one call per event; a failure is reported and ends
@@ -184,6 +187,8 @@ class PeerNode {
   Clock::time_point next_fetch_{};             // one fetch per heartbeat interval
   Clock::time_point next_join_hello_{};        // one greeting per snapshot's expected time
   Clock::time_point next_divergence_check_{};  // one snapshot request per 4 heartbeats
+  Clock::time_point next_snapshot_request_{};  // while one is awaited, not before this
+  Clock::time_point last_snapshot_chunk_{};    // when the last chunk came
 
   std::vector<std::uint64_t> inbound_;  // aligned copy of a misaligned message
   std::thread thread_;

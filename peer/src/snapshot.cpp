@@ -102,6 +102,9 @@ Snapshot decode_snapshot(std::span<const std::uint8_t> bytes) {
 bool SnapshotAssembly::add(std::uint64_t version, std::uint64_t chain, std::uint64_t offset,
                            std::uint64_t total, std::span<const std::uint8_t> data) {
   if (version != version_ || total != buffer_.size()) {
+    // Another snapshot's chunk: finish the one under way first (two senders, or two answers
+    // of one sender at two versions, would otherwise restart each other for ever).
+    if (!chunks_.empty()) return false;
     version_ = version;
     chain_ = chain;
     buffer_.assign(total, 0);
@@ -109,6 +112,7 @@ bool SnapshotAssembly::add(std::uint64_t version, std::uint64_t chain, std::uint
   }
   if (offset > total || data.size() > total - offset)
     throw InvalidInput("snapshot chunk outside its buffer");
+  if (!chunks_.emplace(offset, data.size()).second) return false;  // a repeat adds nothing
   std::memcpy(buffer_.data() + offset, data.data(), data.size());
   received_ += data.size();
   return received_ >= buffer_.size();
@@ -117,8 +121,14 @@ bool SnapshotAssembly::add(std::uint64_t version, std::uint64_t chain, std::uint
 std::vector<std::uint8_t> SnapshotAssembly::take() {
   std::vector<std::uint8_t> out = std::move(buffer_);
   buffer_ = {};
+  chunks_.clear();
   received_ = 0;
-  return out;
+  return out;  // version() and chain() still describe it
+}
+
+void SnapshotAssembly::reset() {
+  take();
+  version_ = ~std::uint64_t{0};
 }
 
 }  // namespace csculpt::peer

@@ -36,23 +36,27 @@ std::vector<std::uint8_t> encode_snapshot(const Mesh& mesh, const MergeFrame& fr
 /// a missing frame or attribution of the wrong size.
 Snapshot decode_snapshot(std::span<const std::uint8_t> bytes);
 
-/// Collects one snapshot's chunks (any order; a chunk of another version or size restarts).
+/// Collects one snapshot's chunks, in any order. Chunks of another snapshot (version or size)
+/// are ignored while one is under way; reset() gives up on it (its sender went quiet).
 class SnapshotAssembly {
  public:
-  /// Adds a chunk; true when every byte is in (then take()). Throws InvalidInput for a chunk
-  /// outside its buffer.
+  /// Adds a chunk; true when every byte is in (then take()). A chunk already added counts
+  /// once. Throws InvalidInput for a chunk outside its buffer.
   bool add(std::uint64_t version, std::uint64_t chain, std::uint64_t offset, std::uint64_t total,
            std::span<const std::uint8_t> data);
   /// The assembled bytes; the assembly is empty afterwards (its memory freed).
   std::vector<std::uint8_t> take();
+  /// Drops a snapshot under way.
+  void reset();
   std::uint64_t version() const { return version_; }
   std::uint64_t chain() const { return chain_; }
 
  private:
   std::uint64_t version_ = ~std::uint64_t{0};  // of the snapshot being assembled; none yet
   std::uint64_t chain_ = 0;
-  std::vector<std::uint8_t> buffer_;  // `total` bytes, filled as chunks come
-  std::size_t received_ = 0;          // bytes of chunks added (repeats count again)
+  std::vector<std::uint8_t> buffer_;             // `total` bytes, filled as chunks come
+  std::map<std::uint64_t, std::size_t> chunks_;  // offset -> size of the chunks added
+  std::size_t received_ = 0;                     // bytes of the chunks added
 };
 
 }  // namespace csculpt::peer
