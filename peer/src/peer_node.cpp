@@ -13,8 +13,7 @@ PeerNode::PeerNode(const Invite& invite, bool creator, const SessionOptions& opt
     : options_(options),
       invite_(invite),
       self_(options.id ? options.id : random_u64() | 1),
-      transport_(invite, self_, options.bind, options.max_message_bytes,
-                 options.membership.heartbeat, options.membership.evasive),
+      transport_(invite, self_, options.bind, options.max_message_bytes),
       membership_(self_, transport_.endpoint(), options.membership),
       election_(self_) {
   if (creator) invite_.endpoint = transport_.endpoint();
@@ -437,8 +436,10 @@ void PeerNode::expire(Clock::time_point now) {
   const Membership::Changes changes = membership_.tick(now);
   for (PeerId p : changes.evasive) event(EventKind::peer_evasive, p);
   for (PeerId p : changes.expired) {
-    if (const auto it = before.find(p); it != before.end() && !it->second.endpoint.empty())
+    if (const auto it = before.find(p); it != before.end() && !it->second.endpoint.empty()) {
       lost_[it->second.endpoint] = now;
+      transport_.disconnect(it->second.endpoint);  // greeted over a new connection
+    }
     departed(p, "expired");
   }
 }

@@ -113,10 +113,6 @@ zmq::socket_t curve_dealer(zmq::context_t& context, const std::string& endpoint,
       s.set(zmq::sockopt::routing_id,
             zmq::const_buffer(options.routing_id->data(), options.routing_id->size()));
     s.set(zmq::sockopt::maxmsgsize, options.max_message_bytes);
-    if (options.heartbeat.count() > 0) {
-      s.set(zmq::sockopt::heartbeat_ivl, static_cast<int>(options.heartbeat.count()));
-      s.set(zmq::sockopt::heartbeat_timeout, static_cast<int>(options.heartbeat_timeout.count()));
-    }
     s.connect(endpoint);
     return s;
   } catch (const zmq::error_t& e) {
@@ -125,13 +121,8 @@ zmq::socket_t curve_dealer(zmq::context_t& context, const std::string& endpoint,
 }
 
 Transport::Transport(const Invite& invite, PeerId self, const std::string& bind,
-                     std::size_t max_message_bytes, std::chrono::milliseconds heartbeat,
-                     std::chrono::milliseconds silence)
-    : self_(self),
-      invite_(invite),
-      max_message_bytes_(max_message_bytes),
-      heartbeat_(heartbeat),
-      silence_(silence) {
+                     std::size_t max_message_bytes)
+    : self_(self), invite_(invite), max_message_bytes_(max_message_bytes) {
   raise_fd_limit();
   server_public_ = curve_public(invite.server_secret);
   client_public_ = curve_public(invite.client_secret);
@@ -152,8 +143,6 @@ Transport::Transport(const Invite& invite, PeerId self, const std::string& bind,
     // A member reconnecting (its old connection dead but not yet closed here, as after a
     // partition) is heard at once instead of refused until the old one times out.
     router_.set(zmq::sockopt::router_handover, 1);
-    router_.set(zmq::sockopt::heartbeat_ivl, static_cast<int>(heartbeat_.count()));
-    router_.set(zmq::sockopt::heartbeat_timeout, static_cast<int>(silence_.count()));
     monitor_.emplace(context_, router_);
     router_.bind(bind);
     endpoint_ = advertised_endpoint(router_.get(zmq::sockopt::last_endpoint));
@@ -175,10 +164,13 @@ void Transport::connect(const std::string& endpoint) {
   o.routing_id = &rid;
   o.max_message_bytes = static_cast<std::int64_t>(max_message_bytes_);
   o.send_hwm = 10000;
-  o.heartbeat = heartbeat_;
-  o.heartbeat_timeout = silence_;
   dealers_.emplace(endpoint,
                    curve_dealer(context_, endpoint, server_public_, invite_.client_secret, o));
+}
+
+void Transport::disconnect(const std::string& endpoint) {
+  dealers_.erase(endpoint);
+  departed_.erase(endpoint);
 }
 
 bool Transport::send(const std::string& endpoint, std::span<const std::uint8_t> bytes) {

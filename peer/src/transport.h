@@ -50,9 +50,6 @@ struct DealerOptions {
   const RoutingId* routing_id = nullptr;  ///< none: libzmq picks one
   std::int64_t max_message_bytes = -1;    ///< ZMQ_MAXMSGSIZE; -1 = unlimited
   int send_hwm = 1000;                    ///< messages queued before sends are dropped
-  /// ZMTP heartbeats (ZMQ_HEARTBEAT_IVL/TIMEOUT); 0: none. A connection silent for the timeout
-  /// is closed and made again.
-  std::chrono::milliseconds heartbeat{0}, heartbeat_timeout{0};
 };
 /// A connected CURVE DEALER (the hostile test client makes them with wrong keys too). Throws
 /// IoError.
@@ -70,13 +67,12 @@ class Transport {
  public:
   /// Binds the ROUTER to `bind` (port * picks a free one) with the invite's CURVE keys and
   /// starts answering ZAP requests; raises the process's open-file limit (raise_fd_limit).
-  /// Every connection, both ways, is pinged every `heartbeat` and closed (then made again)
-  /// when silent for `silence`: after a network partition the TCP connections are still
-  /// "established" while their retransmissions back off for seconds, and a fresh one heals
-  /// at once. Throws IoError naming the endpoint that failed.
+  /// Throws IoError naming the endpoint that failed. (No ZMTP heartbeats: libzmq 4.3.4's
+  /// heartbeat timer writes to a connection whose input stopped with an error and aborts the
+  /// process on `!_io_error`, stream_engine_base.cpp:331, seen in a chaos run; membership has
+  /// its own heartbeats, and PeerNode drops the connection to a member that expired.)
   Transport(const Invite& invite, PeerId self, const std::string& bind,
-            std::size_t max_message_bytes, std::chrono::milliseconds heartbeat,
-            std::chrono::milliseconds silence);
+            std::size_t max_message_bytes);
   ~Transport();
   Transport(const Transport&) = delete;
   Transport& operator=(const Transport&) = delete;
@@ -87,6 +83,10 @@ class Transport {
   /// Connects a DEALER to `endpoint` once (later calls reuse it). Throws IoError for an
   /// endpoint ZeroMQ cannot connect to.
   void connect(const std::string& endpoint);
+  /// Closes our DEALER to `endpoint` at once (the next send makes a new connection: after a
+  /// partition the old one's TCP retransmissions back off for seconds; the ROUTER at the other
+  /// end lets the new connection take over our routing id).
+  void disconnect(const std::string& endpoint);
   /// Sends without ever blocking: past the high-water mark the message is dropped (the protocol
   /// recovers by fetches, resends and snapshots). False if it was dropped or `endpoint` could
   /// not be connected to.
@@ -126,7 +126,6 @@ class Transport {
   CurveKey server_public_{};  // every member's ROUTER has this key
   CurveKey client_public_{};  // the only client key ZAP admits
   std::size_t max_message_bytes_;
-  std::chrono::milliseconds heartbeat_, silence_;  // ZMTP liveness of every connection
   zmq::context_t context_{1};
   zmq::socket_t zap_;                        // inproc ZAP handler: bound before any CURVE socket
   zmq::socket_t router_;                     // where every peer's DEALER sends to us

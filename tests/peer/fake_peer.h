@@ -19,8 +19,7 @@ class FakePeer {
   FakePeer(const std::string& invite, PeerId id)
       : invite_(parse_invite(invite)),
         id_(id),
-        transport_(invite_, id, "tcp://127.0.0.1:*", std::size_t{64} << 20, Millis{200},
-                   Millis{600}) {}
+        transport_(invite_, id, "tcp://127.0.0.1:*", std::size_t{64} << 20) {}
 
   EnvelopeHeader header() const { return {invite_.session, id_, 0}; }
   void send(const Bytes& bytes) { transport_.send(invite_.endpoint, bytes); }

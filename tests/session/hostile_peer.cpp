@@ -146,7 +146,7 @@ class Keyed {
       : inv_(inv),
         self_(self),
         overflow_epoch_(overflow_epoch),
-        transport_(inv, self, "tcp://127.0.0.1:*", std::size_t{64} << 20, Millis{200}, Millis{600}),
+        transport_(inv, self, "tcp://127.0.0.1:*", std::size_t{64} << 20),
         endpoint_(transport_.endpoint()) {}
 
   int run(double seconds) {
