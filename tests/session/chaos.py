@@ -212,6 +212,11 @@ def diagnose(cluster):
         silent = time.time() - state.get("_read_at", 0)
         print(f"peer {p.peer_id}: exit {code}, silent {silent:.1f} s, stderr {p.stderr[-500:]!r}",
               flush=True)
+        reasons = {}
+        for line in p.events("dropped"):
+            reasons[line["reason"]] = reasons.get(line["reason"], 0) + 1
+        if reasons:
+            print(f"  dropped: {sorted(reasons.items(), key=lambda r: -r[1])[:3]}", flush=True)
         if code is None and silent > 5 and shutil.which("gdb"):
             stacks = subprocess.run(["gdb", "-p", str(p.proc.pid), "-batch", "-ex",
                                      "thread apply all bt 15"], capture_output=True, text=True,
