@@ -39,14 +39,13 @@ TIMING = ["--sync-ms", "50", "--heartbeat-ms", "100", "--evasive-ms", "400",
           "--expired-ms", "1000", "--join-timeout-ms", "30000"]
 RATE = 2.0          # strokes (and markers) per second per peer
 MARKER_SLOTS = 16   # cli/markers.h kMarkerSlots
-MAX_INCARNATIONS = 64
 
 
 class Cluster:
     """The peers by position 1..PEERS (each position's namespace), with every incarnation kept
     for the checker."""
 
-    def __init__(self, nets, faces, edit_seconds):
+    def __init__(self, nets, faces, edit_seconds, minutes):
         self.nets = nets
         self.faces = int(faces)
         self.edit_seconds = edit_seconds
@@ -54,15 +53,17 @@ class Cluster:
         self.everyone = []    # every incarnation, killed ones too
         self.incarnations = 0
         self.next_id = 1
-        # Each incarnation marks its own vertices: slot n % 16, a block of `limit` markers.
+        # Each incarnation marks its own vertices: slot n % 16, a block of `limit` markers. A
+        # kill is a third of the faults, which come every 2-10 s: at most ~6 a minute.
+        self.max_incarnations = PEERS + 4 + int(minutes * 6)
         vertices = self.faces // 2
-        rows = (MAX_INCARNATIONS + MARKER_SLOTS - 1) // MARKER_SLOTS
+        rows = (self.max_incarnations + MARKER_SLOTS - 1) // MARKER_SLOTS
         self.marker_limit = vertices // MARKER_SLOTS // rows
 
     def markers(self):
         n = self.incarnations
         self.incarnations += 1
-        if n >= MAX_INCARNATIONS:
+        if n >= self.max_incarnations:
             raise RuntimeError("more incarnations than marker blocks")
         return ["--markers", "--marker-slot", str(n % MARKER_SLOTS), "--marker-first",
                 str((n // MARKER_SLOTS) * self.marker_limit), "--marker-limit",
@@ -236,7 +237,7 @@ def run(minutes, seed, faces):
     cluster = None
     try:
         nets.build(PEERS)
-        cluster = Cluster(nets, faces, edit_seconds=minutes * 60 + 5)
+        cluster = Cluster(nets, faces, edit_seconds=minutes * 60 + 5, minutes=minutes)
         creator = cluster.start(1)
         invite = creator.invite()
         for position in range(2, PEERS + 1):
