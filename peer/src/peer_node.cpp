@@ -367,10 +367,12 @@ void PeerNode::on_snapshot_chunk(const fb::SnapshotChunk& c) {
     return dropped("snapshot of " + std::to_string(c.total()) + " bytes exceeds the limit");
   // A snapshot older than our version is only wanted when we asked for it (divergence).
   if (joined_ && c.version() < replication_.version() && !snapshot_requested_) return;
-  last_snapshot_chunk_ = Clock::now();
-  if (!snapshot_.add(c.version(), c.chain(), c.offset(), c.total(),
-                     {c.data()->data(), c.data()->size()}))
-    return;
+  const bool complete = snapshot_.add(c.version(), c.chain(), c.offset(), c.total(),
+                                      {c.data()->data(), c.data()->size()});
+  // Only chunks of the snapshot under way say it is still coming: chunks of another one, which
+  // it ignores, must not keep a stalled one from being given up (request_snapshot, heartbeat).
+  if (snapshot_.version() == c.version()) last_snapshot_chunk_ = Clock::now();
+  if (!complete) return;
   auto snap = std::make_shared<const Snapshot>(decode_snapshot(snapshot_.take()));
   if (joined_ && snap->mesh.triangles != base_.triangles)
     return dropped("snapshot of another mesh connectivity");
