@@ -174,7 +174,7 @@ class Schedule:
         self.faults["partition"] += 1
 
 
-def check(cluster, log):
+def check(cluster):
     """The checker; returns the figures, raises AssertionError saying what failed."""
     live = list(cluster.live.values())
     for p in live:
@@ -261,7 +261,7 @@ def run(minutes, seed, faces):
         settled = wait_all(lambda: converged(list(cluster.live.values())), 120, "one chain",
                            list(cluster.live.values()))
         one_chain_s = time.time() - last_fault
-        figures = check(cluster, log)
+        figures = check(cluster)
         figures.update({"seed": seed, "minutes": minutes, "faces": faces, "faults": schedule.faults,
                         "incarnations": cluster.incarnations, "merger": sorted(merged)[0],
                         "one_merger_after_last_fault_s": round(one_merger_s, 2),
