@@ -68,27 +68,31 @@ void restore(const Mesh& base, const Diff& d, Mesh& local) {
   }
 }
 
-bool rebase_onto_version(Mesh& base, const Diff* ours, const Diff& merged, Mesh& local,
-                         Merger& merger, const MergeFrame& frame, bool unedited) {
+bool rebase_onto_versions(Mesh& base, const Diff* ours, std::span<const Diff* const> merged,
+                          Mesh& local, Merger& merger, const MergeFrame& frame, bool unedited,
+                          const std::function<void(std::size_t, const Mesh&)>& before_each) {
   const bool empty = local.positions.empty();
   if (!empty && !same_layout(base, local))
     throw InvalidInput("update: the local mesh's vertices or channels differ from the session's");
-  if (empty || unedited || equals_base_plus(base, ours, local)) {
-    // No edits since the submit (the common case): local = base + ours becomes the new
-    // version sparsely: our submitted vertices back to the base, then the merged diff.
-    if (!empty) {
-      if (ours) restore(base, *ours, local);
-      apply_diff(merged, local);
-    }
-    apply_diff(merged, base);
-    if (empty) local = base;
-    return false;
+  const bool edited = !empty && !unedited && !equals_base_plus(base, ours, local);
+  // With edits since the submit: the state the submit described (the base if none of ours is
+  // in), which both they and the versions are measured from.
+  Mesh sent_state;
+  if (edited) {
+    sent_state = base;
+    if (ours) apply_diff(*ours, sent_state);
+  } else if (!empty && ours) {
+    restore(base, *ours, local);  // local = base + ours follows the versions sparsely
   }
-  // Edits made since the submit: merged with what the version changed relative to S, the state
-  // the submit described (the base if none of ours is in).
-  Mesh sent_state = base;
-  if (ours) apply_diff(*ours, sent_state);
-  apply_diff(merged, base);
+  for (std::size_t i = 0; i < merged.size(); ++i) {
+    if (before_each) before_each(i, base);
+    apply_diff(*merged[i], base);
+    if (!edited && !empty) apply_diff(*merged[i], local);
+  }
+  if (empty) local = base;
+  if (!edited) return false;
+  // One merge for the whole run: a host catching up on hundreds of versions while it edits
+  // does not merge hundreds of times.
   const Diff theirs = capture_diff(sent_state, base);
   const Diff mine = capture_diff(sent_state, local);
   merge_into(sent_state, theirs, mine, local, merger, frame);

@@ -32,23 +32,37 @@ std::size_t bytes_of(const Diff& d) {
 
 }  // namespace
 
-void RevertLog::record(std::uint64_t version, const Diff& merged, const Mesh& base) {
-  if (!entries_.empty() && entries_.back().first + 1 != version) clear();
-  Diff old = overwritten_by(merged, base);
-  bytes_ += bytes_of(old);
-  entries_.emplace_back(version, std::move(old));
+void RevertLog::push(Entry e) {
+  bytes_ += bytes_of(e.old);
+  entries_.push_back(std::move(e));
   while (entries_.size() > 1 && bytes_ > max_bytes_) {
-    bytes_ -= bytes_of(entries_.front().second);
+    bytes_ -= bytes_of(entries_.front().old);
     entries_.pop_front();
   }
 }
 
+void RevertLog::record(std::uint64_t version, const Diff& merged, const Mesh& base) {
+  if (!entries_.empty() && entries_.back().version + 1 != version) clear();
+  push({version, version - 1, overwritten_by(merged, base)});
+}
+
+void RevertLog::jumped(std::uint64_t from_version, const Mesh& from, std::uint64_t version,
+                       const Mesh& to) {
+  while (!entries_.empty() && entries_.back().version > from_version) {
+    bytes_ -= bytes_of(entries_.back().old);
+    entries_.pop_back();
+  }
+  // Entries that do not end at `from` (the log was cleared since) describe another state.
+  if (!entries_.empty() && entries_.back().version != from_version) clear();
+  push({version, from_version, overwritten_by(capture_diff(from, to), from)});
+}
+
 std::uint64_t RevertLog::revert(Mesh& mesh, std::uint64_t version, std::uint64_t target) const {
-  if (entries_.empty() || entries_.back().first != version) return version;
+  if (entries_.empty() || entries_.back().version != version) return version;
   std::uint64_t reached = version;
   for (auto it = entries_.rbegin(); it != entries_.rend() && reached > target; ++it) {
-    apply_diff(it->second, mesh);
-    reached = it->first - 1;
+    apply_diff(it->old, mesh);
+    reached = it->previous;
   }
   return reached;
 }

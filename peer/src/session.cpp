@@ -3,7 +3,6 @@
 #include "csculpt/peer/session.h"
 
 #include <algorithm>
-#include <deque>
 #include <map>
 
 #include "attribution.h"
@@ -60,6 +59,8 @@ struct Session::Impl {
   std::vector<std::uint8_t> marked;
   std::vector<std::uint32_t> candidates;
   Diff captured;
+  /// Reused by update(): the diffs of the versions it applies at once.
+  std::vector<const Diff*> merged;
   /// Strokes sent but not yet seen inside a merged version, and what each submit carried.
   std::uint32_t unacknowledged_strokes = 0;
   std::map<std::uint64_t, std::uint32_t> strokes_at;
@@ -67,7 +68,7 @@ struct Session::Impl {
   /// The values each applied version overwrote: how base steps back to a fork point.
   RevertLog reverts;
   /// Versions and snapshots taken from the network thread and not yet applied.
-  std::deque<HostItem> pending;
+  std::vector<HostItem> pending;
   // the host side's statistics
   std::uint64_t versions_applied = 0, rebases = 0, strokes_submitted = 0, branch_rebases = 0,
                 branch_versions_dropped = 0;
@@ -119,12 +120,17 @@ struct Session::Impl {
   /// unmerged edit) put into `local` at its base version. True when `local` holds edits to send.
   bool replay_journal(const std::optional<OwnEdit>& own, Mesh& local);
   void restore_own(const OwnEdit& own, Mesh& local);
-  /// The mesh `item`'s snapshot branched from: our base stepped back to the fork point when
-  /// we held another branch, so that branch's versions since are carried over, not dropped.
-  Mesh fork_base(const HostItem& item);
-  /// Applies a merged version; true if an edit we submitted was left out of it (resend).
-  /// `unedited`: `local` is known to equal the base plus the latest submit.
-  bool apply_version(const HostItem& item, Mesh& local, bool unedited);
+  /// The mesh `item`'s snapshot branched from, and its version: our base stepped back to the
+  /// fork point when we held another branch, so that branch's versions since are carried over,
+  /// not dropped.
+  std::pair<Mesh, std::uint64_t> fork_base(const HostItem& item);
+  /// The submit of ours `item` includes (null: none; `sequence` is then left alone), its
+  /// strokes counted acknowledged.
+  const Diff* acknowledge(const HostItem& item, std::uint64_t& sequence);
+  /// Applies consecutive merged versions, with one rebase of the host's edits; true if an edit
+  /// we submitted was left out of them (resend). `unedited`: `local` is known to equal the base
+  /// plus the latest submit.
+  bool apply_versions(std::span<const HostItem> run, Mesh& local, bool unedited);
 };
 
 Session::Session(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -232,7 +238,7 @@ bool Session::Impl::replay_journal(const std::optional<OwnEdit>& own, Mesh& loca
   };
   restore_when_due();
   for (HostItem& item : node->host().take_items()) {
-    apply_version(item, local, /*unedited=*/false);
+    apply_versions({&item, 1}, local, /*unedited=*/false);
     ++versions_applied;
     restore_when_due();
   }
@@ -320,15 +326,17 @@ bool Session::Impl::send(const Diff& d, Mesh& local, std::uint32_t strokes) {
   return true;
 }
 
-Mesh Session::Impl::fork_base(const HostItem& item) {
-  Mesh from = base;
+std::pair<Mesh, std::uint64_t> Session::Impl::fork_base(const HostItem& item) {
+  std::pair<Mesh, std::uint64_t> from{base, version};
   // No common version known: the whole kept history is carried (what both branches share
   // merges as one intent, SameChange::once).
   const std::uint64_t fork = item.fork.value_or(0);
   if (fork >= version) return from;  // our branch is the snapshot's: nothing of ours is lost
-  const std::uint64_t reached = reverts.revert(from, version, fork);
+  from.second = reverts.revert(from.first, version, fork);
   ++branch_rebases;
-  if (item.fork) branch_versions_dropped += reached - fork;
+  // Versions after the fork the log no longer reaches stay in the base: their changes are
+  // not carried (a step over an earlier snapshot may reach before the fork: nothing dropped).
+  if (item.fork && from.second > fork) branch_versions_dropped += from.second - fork;
   return from;
 }
 
@@ -361,7 +369,9 @@ void Session::Impl::apply_snapshot(const HostItem& item, Mesh& local) {
   if (has_base) {
     // Carry the local edits, and our branch's versions since the fork, over to the snapshot.
     ensure_merge_state();
-    Mesh from = fork_base(item);
+    auto [from, from_version] = fork_base(item);
+    // A later fork may lie before this snapshot: the log steps back over it too.
+    reverts.jumped(from_version, from, item.version, snap);
     if (rebase_onto_snapshot(from, snap, local, *merger, frame)) ++rebases;
     base = std::move(from);  // the snapshot now
   } else {
@@ -373,39 +383,50 @@ void Session::Impl::apply_snapshot(const HostItem& item, Mesh& local) {
   submitted.clear();
   strokes_at.clear();  // those submits are not in the snapshot: their strokes go out again
   last_submit_digest = 0;
-  reverts.clear();  // the versions it stepped back were another branch's
   ensure_merge_state();
   retouch_all(local);
 }
 
-bool Session::Impl::apply_version(const HostItem& item, Mesh& local, bool unedited) {
-  ensure_merge_state();
-  // The submit of ours the version includes (none: the state it describes is the base).
+const Diff* Session::Impl::acknowledge(const HostItem& item, std::uint64_t& sequence) {
   const Diff* ours = nullptr;
-  std::uint64_t merged_sequence = 0;
   for (const MergedSubmit& m : item.merged_by)
     if (m.peer == node->id())
       if (auto it = submitted.find(m.sequence); it != submitted.end()) {
         ours = &it->second;
-        merged_sequence = m.sequence;
+        sequence = m.sequence;
         if (auto st = strokes_at.find(m.sequence); st != strokes_at.end()) {
           const std::uint32_t acknowledged = std::min(unacknowledged_strokes, st->second);
           unacknowledged_strokes -= acknowledged;
           strokes_acknowledged += acknowledged;
         }
       }
-  reverts.record(item.version, item.merged, base);
-  // Known equal when the version includes our latest submit (or none was sent) and the host
+  return ours;
+}
+
+bool Session::Impl::apply_versions(std::span<const HostItem> run, Mesh& local, bool unedited) {
+  ensure_merge_state();
+  // Our submits were all based on the version before the run: the first version that merged
+  // one holds it (a later one cannot).
+  const Diff* ours = nullptr;
+  std::uint64_t merged_sequence = 0;
+  for (const HostItem& item : run)
+    if (const Diff* d = acknowledge(item, merged_sequence)) ours = d;
+  // Known equal when the run includes our latest submit (or none was sent) and the host
   // edited nothing since: the rebase need not compare the whole mesh again.
   const bool known =
       unedited && (submitted.empty() ? ours == nullptr : ours == &submitted.rbegin()->second);
-  if (rebase_onto_version(base, ours, item.merged, local, *merger, frame, known)) {
+  merged.clear();  // reused: update() runs every frame
+  for (const HostItem& item : run) merged.push_back(&item.merged);
+  const auto keep_reverts = [&](std::size_t i, const Mesh& before) {
+    reverts.record(run[i].version, run[i].merged, before);
+  };
+  if (rebase_onto_versions(base, ours, merged, local, *merger, frame, known, keep_reverts)) {
     ++rebases;
     retouch_all(local);
   } else {
     touched.clear();  // local is the new base (or empty)
   }
-  version = item.version;
+  version = run.back().version;
   const bool resend = !submitted.empty() && submitted.rbegin()->first != merged_sequence;
   submitted.clear();
   strokes_at.clear();
@@ -430,20 +451,33 @@ std::size_t Session::update(Mesh& local) {
     unedited = s.holds_only_submitted(local);
     if (!unedited) check_host_values(local, s.base, s.frame, "update");
   }
-  while (!s.pending.empty()) {
-    HostItem& item = s.pending.front();
-    if (item.snapshot) {
-      // Edits submitted but not in the snapshot, or a lost branch's carried over: sent again.
-      resend |= !s.submitted.empty() || (s.has_base && item.fork.value_or(0) < s.version);
-      s.apply_snapshot(item, local);
-      ++applied;
-    } else if (item.version == s.version + 1) {  // always: the node hands them in order
-      resend |= s.apply_version(item, local, unedited);
-      ++applied;
+  std::size_t done = 0;  // pending[0, done) are applied: a failure keeps the rest for the next call
+  try {
+    while (done < s.pending.size()) {
+      const HostItem& item = s.pending[done];
+      std::size_t n = 1;
+      if (item.snapshot) {
+        // Edits submitted but not in the snapshot, or a lost branch's carried over: sent again.
+        resend |= !s.submitted.empty() || (s.has_base && item.fork.value_or(0) < s.version);
+        s.apply_snapshot(item, local);
+        ++applied;
+      } else if (item.version == s.version + 1) {  // always: the node hands them in order
+        // With the versions that follow it, up to a snapshot: one rebase for them all.
+        while (done + n < s.pending.size() && !s.pending[done + n].snapshot &&
+               s.pending[done + n].version == item.version + n)
+          ++n;
+        resend |= s.apply_versions({s.pending.data() + done, n}, local, unedited);
+        applied += n;
+      }
+      done += n;
+      unedited = s.touched.empty();  // exact after a version or snapshot: local is the base
     }
-    s.pending.pop_front();         // only once applied: a failure keeps it for the next call
-    unedited = s.touched.empty();  // exact after a version or snapshot: local is the base
+  } catch (...) {
+    s.versions_applied += applied;
+    s.pending.erase(s.pending.begin(), s.pending.begin() + static_cast<std::ptrdiff_t>(done));
+    throw;
   }
+  s.pending.clear();
   s.versions_applied += applied;
   // The touched vertices are exact after a rebase: the resend need not capture the whole mesh.
   if (resend && !local.positions.empty()) submit(local, 0, {});

@@ -59,4 +59,44 @@ TEST(RevertLog, AVersionThatDoesNotFollowStartsAgain) {
   EXPECT_EQ(mesh_digest(m), mesh_digest(later[0]));
 }
 
+TEST(RevertLog, StepsBackOverASnapshotToAForkBeforeIt) {
+  Mesh mesh = sphere();
+  RevertLog log;
+  const std::vector<Mesh> ours = apply_versions(mesh, log, 5);  // versions 1..5
+  // Our branch lost at a fork at 3: the base steps back there and becomes a snapshot of 8.
+  Mesh from = mesh;
+  ASSERT_EQ(log.revert(from, 5, 3), 3u);
+  Mesh snapshot = from;
+  apply_diff(stroke_diff(snapshot, {1.f, 0.f, 0.f}, {0.f, 0.1f, 0.f}, false), snapshot);
+  log.jumped(3, from, 8, snapshot);
+  Mesh now = snapshot;
+  const std::vector<Mesh> after = apply_versions(now, log, 2, 9);  // versions 9 and 10
+  // A later fork at 9 steps back version by version; one at 2 steps over the snapshot to the
+  // state both branches held, then on.
+  Mesh m = now;
+  EXPECT_EQ(log.revert(m, 10, 9), 9u);
+  EXPECT_EQ(mesh_digest(m), mesh_digest(after[1]));
+  m = now;
+  EXPECT_EQ(log.revert(m, 10, 2), 2u);
+  EXPECT_EQ(mesh_digest(m), mesh_digest(ours[2]));
+  // A fork inside the snapshot's step (at 5, a version of the lost branch) reaches back
+  // before it, to 3: more is carried, nothing is dropped.
+  m = now;
+  EXPECT_EQ(log.revert(m, 10, 5), 3u);
+  EXPECT_EQ(mesh_digest(m), mesh_digest(ours[3]));
+}
+
+TEST(RevertLog, ASnapshotAfterTheLogWasClearedStartsItAgain) {
+  Mesh mesh = sphere();
+  RevertLog log;
+  apply_versions(mesh, log, 3);
+  Mesh snapshot = mesh;
+  apply_diff(stroke_diff(snapshot, {1.f, 0.f, 0.f}, {0.f, 0.1f, 0.f}, false), snapshot);
+  // The base was at 7, a version the log does not end at: its entries describe another state.
+  log.jumped(7, mesh, 12, snapshot);
+  Mesh m = snapshot;
+  EXPECT_EQ(log.revert(m, 12, 0), 7u);
+  EXPECT_EQ(mesh_digest(m), mesh_digest(mesh));
+}
+
 }  // namespace

@@ -21,6 +21,7 @@ using namespace csculpt;
 using namespace csculpt::peer;
 using namespace std::chrono_literals;
 using csculpt::peer::testing::fast_options;
+using csculpt::peer::testing::wait_until;
 
 struct Artist {
   std::unique_ptr<Session> session;
@@ -127,6 +128,47 @@ TEST(Session, EditsMadeWhileAMergeIsInFlightAreRebasedNotLost) {
   }
   EXPECT_GT(near_plus, 0.02f);
   EXPECT_GT(near_minus, 0.02f);
+}
+
+// A host that was busy (a long stroke, a stalled frame) finds many versions waiting while it
+// holds edits of its own: they are applied with one rebase, not one merge per version (a host
+// catching up on hundreds of versions used to go silent for seconds).
+TEST(Session, AHostCatchingUpWhileItEditsRebasesOnceForAllWaitingVersions) {
+  const Mesh sphere = make_sphere(3000);
+  Artist a{Session::create(sphere, fast_options(1)), sphere};
+  Artist b{Session::join(a.session->invite(), fast_options(2)), {}};
+  b.local = b.session->base();
+  apply_stroke(b.local, grab({-1, 0, 0}, {0, 0, 1}, 0.3f, 0.1f));  // b's edit, not yet sent
+  constexpr std::uint64_t kVersions = 5;
+  for (std::uint64_t i = 1; i <= kVersions; ++i) {
+    apply_stroke(a.local, grab({1, 0, 0}, {0, 0, 1}, 0.3f, 0.02f));
+    a.session->submit(a.local, 1);
+    ASSERT_TRUE(wait_until([&] {
+      a.session->update(a.local);
+      return a.session->version() == i;
+    }));
+  }
+  ASSERT_TRUE(wait_until([&] { return b.session->stats().version == kVersions; }));
+  const SessionStats before = b.session->stats();
+  EXPECT_EQ(b.session->update(b.local), kVersions);
+  const SessionStats after = b.session->stats();
+  EXPECT_EQ(after.versions_applied - before.versions_applied, kVersions);
+  EXPECT_EQ(after.rebases - before.rebases, 1u);
+  EXPECT_EQ(mesh_digest(b.session->base()), mesh_digest(a.session->base()));
+  // Both edits end in the agreed mesh, whole: a's five at +x, b's at -x.
+  const auto lift = [&](const Mesh& m, float side) {
+    float most = 0;
+    for (std::size_t v = 0; v < sphere.vertex_count(); ++v)
+      if (side * sphere.positions[v].x > 0.9f)
+        most = std::max(most, m.positions[v].z - sphere.positions[v].z);
+    return most;
+  };
+  const float a_lift = lift(a.session->base(), 1.f), b_lift = lift(b.local, -1.f);
+  EXPECT_GT(a_lift, 0.02f);
+  EXPECT_GT(b_lift, 0.02f);
+  ASSERT_TRUE(run_until({&a, &b}, [&] { return converged({&a, &b}); }));
+  EXPECT_NEAR(lift(a.local, 1.f), a_lift, 1e-4f);
+  EXPECT_NEAR(lift(a.local, -1.f), b_lift, 1e-3f);
 }
 
 // Issue 12, finding 4: one transient NaN in a host's arrays used to cut it off for good (the

@@ -15,7 +15,12 @@ editing stopped, one chain (version and digest) on every live peer, and every ma
 (killed ones too) saw acknowledged, i.e. present in a version it followed, is present in the
 agreed mesh, read off its values.
 
-    chaos.py [--minutes M] [--seed S] [--faces F]     (exit 0: passed; 1: failed; 77: cannot run)
+    chaos.py [--minutes M] [--seed S] [--faces F] [--logs DIR]
+                                                      (exit 0: passed; 1: failed; 77: cannot run)
+
+With --logs (default: $CSCULPT_CHAOS_LOGS) every incarnation's output (JSON lines, then its
+stderr) is written to DIR/peer-<id>.log at the end, passed or failed, with the schedule in
+DIR/schedule.log: what each peer saw is what a diagnosis needs.
 
 `./dev chaos --minutes 30` is the long run; CTest runs a short one (session.chaos). Needs root,
 iproute2 and nftables."""
@@ -226,12 +231,31 @@ def diagnose(cluster):
                   flush=True)
 
 
-def run(minutes, seed, faces):
+def write_logs(cluster, schedule_lines, directory):
+    """Every incarnation's output and the schedule, for a failure's diagnosis."""
+    os.makedirs(directory, exist_ok=True)
+    with open(os.path.join(directory, "schedule.log"), "w") as f:
+        f.write("\n".join(schedule_lines) + "\n")
+    for p in cluster.everyone:
+        p.stop()  # its stderr is complete once it exited
+        with open(os.path.join(directory, f"peer-{p.peer_id}.log"), "w") as f:
+            f.write(f"# {' '.join(p.cmd)}\n# started {p.started:.3f}\n")
+            with p.cond:
+                for line in p.lines:
+                    f.write(json.dumps(line) + "\n")
+            f.write("# stderr\n" + p.stderr)
+    print(f"logs of {len(cluster.everyone)} peers in {directory}", flush=True)
+
+
+def run(minutes, seed, faces, logs=None):
     rng = random.Random(seed)
     started = time.time()
+    schedule_lines = [f"# started {started:.3f}"]
 
     def log(text):
-        print(f"[{time.time() - started:7.1f} s] {text}", flush=True)
+        line = f"[{time.time() - started:7.1f} s] {text}"
+        schedule_lines.append(line)
+        print(line, flush=True)
 
     nets = Namespaces(SUBNET)
     cluster = None
@@ -274,6 +298,8 @@ def run(minutes, seed, faces):
             diagnose(cluster)
         raise
     finally:
+        if cluster and logs:
+            write_logs(cluster, schedule_lines, logs)
         if cluster:
             for p in cluster.everyone:
                 p.stop()
@@ -285,10 +311,12 @@ def main():
     parser.add_argument("--minutes", type=float, default=2.0)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--faces", type=int, default=20000)
+    parser.add_argument("--logs", default=os.environ.get("CSCULPT_CHAOS_LOGS"),
+                        help="directory for every peer's output")
     args = parser.parse_args()
     exit_unless_possible(CLI, nft=True)
     try:
-        run(args.minutes, args.seed, args.faces)
+        run(args.minutes, args.seed, args.faces, args.logs)
     except AssertionError as e:
         print(f"FAILED: {e}", flush=True)
         sys.exit(1)
