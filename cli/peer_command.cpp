@@ -168,6 +168,9 @@ struct State {
   std::uint64_t version = 0, digest = 0, base_digest = 0, strokes = 0, unacknowledged = 0,
                 acknowledged = 0, dropped = 0, stale = 0, auth_rejected = 0, abandoned = 0,
                 merger = 0, epoch = 0, members = 0;
+  /// With markers: those seen acknowledged, and how many of them the base holds now (fewer
+  /// while a lost branch's are carried, until merged again).
+  std::uint64_t markers_acknowledged = 0, markers_held = 0;
   bool editing = false;
   friend bool operator==(const State&, const State&) = default;
 };
@@ -237,7 +240,8 @@ void print_event(const peer::Event& e, peer::PeerId self, SimulatedArtist& artis
   line.emit();
 }
 
-State read_state(const peer::Session& session, SimulatedArtist& artist, bool editing) {
+State read_state(const peer::Session& session, SimulatedArtist& artist, bool editing,
+                 const MarkerPainter* markers) {
   const peer::SessionStats st = session.stats();
   State s;
   s.version = session.version();
@@ -254,11 +258,18 @@ State read_state(const peer::Session& session, SimulatedArtist& artist, bool edi
   s.epoch = st.epoch;
   s.members = st.members;
   s.editing = editing;
+  if (markers) {
+    s.markers_acknowledged = markers->acknowledged();
+    s.markers_held = s.markers_acknowledged - markers->lost(session.base()).size();
+  }
   return s;
 }
 
-void print_state(const State& s, peer::PeerId self) {
-  Line("state")
+void print_state(const State& s, peer::PeerId self, bool markers) {
+  Line line("state");
+  if (markers)
+    line.num("markers_acknowledged", s.markers_acknowledged).num("markers_held", s.markers_held);
+  line
       .num("id", self)
       .raw("t", now_ms())
       .num("version", s.version)
@@ -309,11 +320,11 @@ void edit_and_sync(const PeerCommandOptions& o, peer::Session& session, Simulate
     artist.step(now, editing);
     if (markers) mark(session, artist, *markers);
     for (const peer::Event& e : session.poll_events()) print_event(e, self, artist);
-    const State s = read_state(session, artist, editing);
+    const State s = read_state(session, artist, editing, markers);
     if (first_state || !(s == last)) {
       first_state = false;
       last = s;
-      print_state(s, self);
+      print_state(s, self, markers != nullptr);
     }
     if (quit || now >= linger_end) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(3));

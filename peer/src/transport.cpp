@@ -113,6 +113,7 @@ zmq::socket_t curve_dealer(zmq::context_t& context, const std::string& endpoint,
       s.set(zmq::sockopt::routing_id,
             zmq::const_buffer(options.routing_id->data(), options.routing_id->size()));
     s.set(zmq::sockopt::maxmsgsize, options.max_message_bytes);
+    s.set(zmq::sockopt::connect_timeout, options.connect_timeout_ms);
     s.connect(endpoint);
     return s;
   } catch (const zmq::error_t& e) {

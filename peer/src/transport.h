@@ -50,6 +50,11 @@ struct DealerOptions {
   const RoutingId* routing_id = nullptr;  ///< none: libzmq picks one
   std::int64_t max_message_bytes = -1;    ///< ZMQ_MAXMSGSIZE; -1 = unlimited
   int send_hwm = 1000;                    ///< messages queued before sends are dropped
+  /// A TCP connect not answered within this is given up and tried again (ZMQ_CONNECT_TIMEOUT,
+  /// after the reconnect interval). Without it, a connect made while a partition drops its SYNs
+  /// waits on the kernel's doubling retransmissions (1, 2, 4 s...) and a healed partition went
+  /// unnoticed for seconds.
+  int connect_timeout_ms = 1000;
 };
 /// A connected CURVE DEALER (the hostile test client makes them with wrong keys too). Throws
 /// IoError.
