@@ -269,8 +269,7 @@ void print_state(const State& s, peer::PeerId self, bool markers) {
   Line line("state");
   if (markers)
     line.num("markers_acknowledged", s.markers_acknowledged).num("markers_held", s.markers_held);
-  line
-      .num("id", self)
+  line.num("id", self)
       .raw("t", now_ms())
       .num("version", s.version)
       .raw("digest", hex64(s.digest))
