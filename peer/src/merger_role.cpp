@@ -65,8 +65,6 @@ MergeOutcome MergerRole::merge(const Mesh& base, std::uint64_t version, std::uin
   VersionRecord& r = out.record;
   r.diff_bytes = encode_diff(merged, base, header, session_wire_options(wire, frame));
   r.merge_ms = std::chrono::duration<float, std::milli>(Clock::now() - t0).count();
-  // Outside merge_ms: a quality measure of the merge, not part of making it (sparse, cheap).
-  out.folds = folds_.count_new_folds(base, diffs, merged);
   r.version = version + 1;
   r.parent_chain = chain;
   r.chain = next_chain(chain, decode_diff(r.diff_bytes, base));
@@ -81,8 +79,19 @@ MergeOutcome MergerRole::merge(const Mesh& base, std::uint64_t version, std::uin
     r.contributions.push_back(measure_contribution(author, p.diff, base, sets[k], frame.scale));
     ++k;
   }
+  last_inputs_ = std::move(pending_);
   pending_.clear();
+  last_merged_ = std::move(merged);
   return out;
+}
+
+std::uint32_t MergerRole::count_last_folds(const Mesh& base) {
+  if (last_inputs_.empty()) return 0;
+  std::vector<const Diff*> diffs;
+  for (const auto& [peer, p] : last_inputs_) diffs.push_back(&p.diff);
+  const std::uint32_t folds = folds_.count_new_folds(base, diffs, last_merged_);
+  last_inputs_.clear();
+  return folds;
 }
 
 }  // namespace csculpt::peer

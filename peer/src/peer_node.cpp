@@ -656,6 +656,7 @@ void PeerNode::merge_pending() {
       merger_->merge(base_, replication_.version(), replication_.chain(), frame_, options_.wire);
   const Bytes message = version_message(header(), o.record, false);
   broadcast(message);
+  const std::uint32_t folds = merger_->count_last_folds(base_);  // base_: the merged-on mesh
   const std::uint32_t conflicting = o.record.conflicting;
   const float merge_ms = o.record.merge_ms;
   apply_version(std::move(o.record));
@@ -665,7 +666,7 @@ void PeerNode::merge_pending() {
     ++s.merges;
     s.merged_strokes += o.merged_strokes;
     s.conflicting_strokes += conflicting;
-    s.folds_introduced += o.folds;
+    s.folds_introduced += folds;
     s.merge_ms_sum += merge_ms;
     s.merge_ms_max = std::max(s.merge_ms_max, double(merge_ms));
     s.version_bytes_sent += message.size() * others;

@@ -814,6 +814,20 @@ void require_valid_frame(const MergeFrame& frame) {
 
 const std::vector<std::uint32_t> kNoChanges;
 
+/// `d` as a merge returns it: one channel entry per channel of `base`, in its order.
+Diff in_base_order(const Diff& d, const Mesh& base) {
+  Diff out;
+  out.vertex_count = d.vertex_count;
+  out.positions = d.positions;
+  for (const Channel& c : base.channels) {
+    ChannelDiff channel{c.desc, {}};
+    for (const ChannelDiff& given : d.channels)
+      if (given.desc.name == c.desc.name) channel.change = given.change;
+    out.channels.push_back(std::move(channel));
+  }
+  return out;
+}
+
 }  // namespace
 
 /// One merge of validated diffs, step by step: the positions (as isometries, or as
@@ -893,6 +907,9 @@ Diff Merger::merge(const Mesh& base, std::span<const Diff* const> diffs, MergeMe
   require_diff_count(diffs.size());
   const DiffKeys keys = validate_and_digest(workspace_->pool, base, diffs);
   require_valid_frame(frame);
+  // One edit merges to itself, exactly, whatever the method: there is nothing to blend it
+  // with. A session merges as submits arrive, so most of its merges hold one.
+  if (diffs.size() == 1) return in_base_order(*diffs[0], base);
   Pass pass{hierarchy_,
             *workspace_,
             timings_,

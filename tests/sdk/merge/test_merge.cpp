@@ -367,6 +367,28 @@ TEST(MergeSingleEdit, OneDiffReproducesTheEditForEveryMethodAndStroke) {
   }
 }
 
+// A session merges as submits arrive: most of its merges hold one submit, which must come
+// out as it went in, to the bit, with the channels in the base's order.
+TEST(MergeSingleEdit, OneDiffMergesToItselfBitForBitForEveryMethod) {
+  for (const Subject* s : all_subjects()) {
+    Merger merger(s->hierarchy);
+    const Mesh edit = edited(*s, {stroke_at(Kind::detail, *s, {0.3f, 0.8f, 0.5f})});
+    const Diff d = capture_diff(s->base, edit);
+    for (MergeMethod m : all_merge_methods()) {
+      SCOPED_TRACE(s->name + " " + method_name(m));
+      const Diff merged = merger.merge(s->base, std::vector<Diff>{d}, m);
+      EXPECT_EQ(merged.positions, d.positions);
+      ASSERT_EQ(merged.channels.size(), s->base.channels.size());
+      for (std::size_t c = 0; c < merged.channels.size(); ++c)
+        EXPECT_EQ(merged.channels[c].desc.name, s->base.channels[c].desc.name);
+      const Mesh result = applied(s->base, merged);
+      EXPECT_TRUE(result.positions == edit.positions);
+      for (std::size_t c = 0; c < edit.channels.size(); ++c)
+        EXPECT_TRUE(result.channels[c].values == edit.channels[c].values);
+    }
+  }
+}
+
 // ---- 2. identity: disjoint edits ---------------------------------------------------------
 
 TEST(MergeIdentity, DisjointEditsEachKeepTheirRegion) {
