@@ -244,8 +244,9 @@ class Session {
   std::span<const std::uint32_t> touched() const;
   /// Applies every merged version received so far to base() and rebases `local` onto it:
   /// local edits not yet inside a merged version are kept, edits already merged are not
-  /// applied twice. A submitted edit that a version did not include (it reached the merger
-  /// after the merge) is sent again, rebased, at once. Returns the number of versions applied.
+  /// applied twice; the versions waiting together cost one rebase. A submitted edit that a
+  /// version did not include (it reached the merger after the merge) is sent again, rebased,
+  /// at once. Returns the number of versions applied.
   std::size_t update(Mesh& local);
   /// Records a stroke the host just ended on `local`, for undo(): the vertices it changed and
   /// their values before it (per vertex: the position, then every channel's values in the
