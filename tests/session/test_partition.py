@@ -10,7 +10,10 @@ mesh itself:
 - once healed, membership stays put (nobody is seen to leave or go evasive).
 
 CSCULPT_PARTITION_SECONDS=300 runs the first case with a five-minute partition (the issue's
-bound) instead of 8 s.
+bound) instead of 8 s; run the script itself then, as CTest stops a test after 300 s:
+
+    CSCULPT_CLI=build/cli/csculpt CSCULPT_PARTITION_SECONDS=300 \
+      python3 tests/session/test_partition.py -v Partition.test_heal_loses_no_acknowledged_marker
 
 Needs root, iproute2 and nftables; otherwise exits 77 (a CTest skip) saying what is missing."""
 
