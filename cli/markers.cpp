@@ -61,6 +61,11 @@ std::vector<std::uint32_t> MarkerPainter::lost(const Mesh& base) const {
   return out;
 }
 
+std::size_t MarkerPainter::held(const Mesh& base) const {
+  return static_cast<std::size_t>(std::count_if(acknowledged_.begin(), acknowledged_.end(),
+                                                [&](std::uint32_t v) { return marked(base, v); }));
+}
+
 std::vector<std::uint32_t> MarkerPainter::present(const Mesh& base) {
   std::vector<std::uint32_t> out;
   const int c = marker_channel(base);

@@ -31,6 +31,9 @@ class MarkerPainter {
   std::vector<std::uint32_t> newly_acknowledged(const Mesh& base);
   /// Acknowledged markers `base` does not hold: lost.
   std::vector<std::uint32_t> lost(const Mesh& base) const;
+  /// How many acknowledged markers `base` holds (the rest are lost, or carried until merged
+  /// again); no allocation, for a check every frame.
+  std::size_t held(const Mesh& base) const;
   /// Every vertex (anyone's) marked in `base`.
   static std::vector<std::uint32_t> present(const Mesh& base);
 

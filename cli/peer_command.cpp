@@ -260,7 +260,7 @@ State read_state(const peer::Session& session, SimulatedArtist& artist, bool edi
   s.editing = editing;
   if (markers) {
     s.markers_acknowledged = markers->acknowledged();
-    s.markers_held = s.markers_acknowledged - markers->lost(session.base()).size();
+    s.markers_held = markers->held(session.base());
   }
   return s;
 }

@@ -86,7 +86,11 @@ MergeOutcome MergerRole::merge(const Mesh& base, std::uint64_t version, std::uin
 }
 
 std::uint32_t MergerRole::count_last_folds(const Mesh& base) {
-  if (last_inputs_.empty()) return 0;
+  // One input merges to itself (Merger::merge): every fold of the result is one it made.
+  if (last_inputs_.size() < 2) {
+    last_inputs_.clear();
+    return 0;
+  }
   std::vector<const Diff*> diffs;
   for (const auto& [peer, p] : last_inputs_) diffs.push_back(&p.diff);
   const std::uint32_t folds = folds_.count_new_folds(base, diffs, last_merged_);

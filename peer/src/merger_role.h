@@ -60,7 +60,8 @@ class MergerRole {
 
   /// The new folds (csculpt/folds.h) the last merge made on `base` (the mesh it merged on),
   /// counted once its version is on its way: a quality measure, not on an edit's path (2 ms
-  /// of a large stroke's merge at 320K faces). Forgets that merge's inputs; 0 when none.
+  /// of a large stroke's merge at 320K faces). Forgets that merge's inputs; 0 when there were
+  /// fewer than two.
   std::uint32_t count_last_folds(const Mesh& base);
 
  private:

@@ -272,8 +272,7 @@ def write_logs(cluster, schedule_lines, directory):
     os.makedirs(directory, exist_ok=True)
     with open(os.path.join(directory, "schedule.log"), "w") as f:
         f.write("\n".join(schedule_lines) + "\n")
-    for p in cluster.everyone:
-        p.stop()  # its stderr is complete once it exited
+    for p in cluster.everyone:  # stopped: their stderr is complete
         with open(os.path.join(directory, f"peer-{p.peer_id}.log"), "w") as f:
             f.write(f"# {' '.join(p.cmd)}\n# started {p.started:.3f}\n")
             with p.cond:
@@ -334,11 +333,11 @@ def run(minutes, seed, faces, logs=None):
             diagnose(cluster)
         raise
     finally:
-        if cluster and logs:
-            write_logs(cluster, schedule_lines, logs)
         if cluster:
             for p in cluster.everyone:
                 p.stop()
+            if logs:
+                write_logs(cluster, schedule_lines, logs)
         nets.close()
 
 
