@@ -52,7 +52,7 @@ std::size_t SimulatedArtist::step(peer::Clock::time_point now, bool editing) {
     started_ = now;
     next_submit_ = now + options_.submit_every;
   }
-  const std::size_t applied = session_.update(local_);
+  const std::size_t applied = update();
   if (editing && options_.strokes_per_second > 0) {
     const double rate = options_.strokes_per_second * static_cast<double>(scripts());
     const double due = std::chrono::duration<double>(now - started_).count() * rate;
@@ -67,6 +67,11 @@ std::size_t SimulatedArtist::step(peer::Clock::time_point now, bool editing) {
     unsent_strokes_ = 0;
   }
   return applied;
+}
+
+std::size_t SimulatedArtist::update() {
+  // changed_ holds what the strokes wrote since the last submit: just what update() asks for.
+  return options_.whole_mesh_submit ? session_.update(local_) : session_.update(local_, changed_);
 }
 
 bool SimulatedArtist::submit(std::uint32_t strokes) {

@@ -44,6 +44,10 @@ class SimulatedArtist {
   /// mesh without the material channels).
   bool stroke();
 
+  /// Takes the merged versions in (Session::update, told the changed vertices unless the
+  /// artist submits the whole mesh); the number applied.
+  std::size_t update();
+
   /// Submits the edit (the changed vertices, or the whole mesh; see ArtistOptions) with
   /// `strokes`; what Session::submit returns.
   bool submit(std::uint32_t strokes);

@@ -59,10 +59,9 @@ void peer_loop(BenchPeer& p, const std::atomic<bool>& stop) {
     bool awaiting_ack = false;
     std::uint64_t acknowledged = p.session->stats().strokes_acknowledged;
     while (!stop.load()) {
-      Mesh& local = p.artist->local();
       const std::uint64_t before = p.session->version();
       const auto t0 = Clock::now();
-      const std::size_t applied = p.session->update(local);
+      const std::size_t applied = p.artist->update();
       const auto now = Clock::now();
       SubmitRecord record;
       const std::uint64_t request = p.request.load();

@@ -291,7 +291,12 @@ void SessionWorker::sync() {
   const csc_vertex_arrays a = mirror_.view();
   if (poll_events()) {
     uint32_t applied = 0;
-    if (csc_status s = csc_session_update(session_, &a, &applied); s != CSC_OK)
+    // The strokes since the last submit are all the worker changed: the session compares and
+    // writes back those and what it changed, not the whole mesh.
+    const auto count = static_cast<uint32_t>(unsent_vertices_.size());
+    if (csc_status s =
+            csc_session_update_changed(session_, &a, unsent_vertices_.data(), count, &applied);
+        s != CSC_OK)
       note(abi_error("cannot apply a merged version", s));
     if (applied > 0) dirty_ = attribution_stale_ = true;
   }

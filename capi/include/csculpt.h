@@ -524,7 +524,7 @@ CSC_API csc_status csc_session_submit(csc_session* session, const csc_vertex_arr
  *  those and the listed ones only; the edit sent is the one csc_session_submit would send when
  *  every change is listed. A change of a vertex that is not listed is not sent until a later
  *  call lists it, a csc_session_submit sends it, or a csc_session_update that applies a
- *  version finds it (it compares the whole arrays). Fails with CSC_ERROR_INVALID_INPUT naming
+ *  version finds it (it compares the whole arrays; csc_session_update_changed does not). Fails with CSC_ERROR_INVALID_INPUT naming
  *  an index out of range (nothing is sent or written). */
 CSC_API csc_status csc_session_submit_changed(csc_session* session, const csc_vertex_arrays* local,
                                               const uint32_t* changed, uint32_t count,
@@ -535,6 +535,21 @@ CSC_API csc_status csc_session_submit_changed(csc_session* session, const csc_ve
  *  merge) is sent again at once. `*applied` (may be NULL) is the number of versions applied. */
 CSC_API csc_status csc_session_update(csc_session* session, const csc_vertex_arrays* local,
                                       uint32_t* applied);
+
+/** csc_session_update at the cost of what changed instead of the whole arrays (since 0.4):
+ *  `changed` lists the `count` vertices the host changed since its last submit of either kind,
+ *  as for csc_session_submit_changed (what csc_session_undo and csc_session_redo write need
+ *  not be listed; may be NULL when count is 0). The session copies in and compares those and
+ *  the vertices it keeps as differing from the agreed version, and writes back only what it
+ *  changed: a frame that applies a small version costs that version, not the mesh (the whole
+ *  arrays are still written after a snapshot or when edits made since the submit are
+ *  rebased). An unlisted change is neither found nor carried over by this call: it stays in
+ *  the arrays, unsent, until a call lists it or a csc_session_submit sends it. Fails with
+ *  CSC_ERROR_INVALID_INPUT naming an index out of range or a bad value (nothing is applied
+ *  or written). */
+CSC_API csc_status csc_session_update_changed(csc_session* session, const csc_vertex_arrays* local,
+                                              const uint32_t* changed, uint32_t count,
+                                              uint32_t* applied);
 
 /* ---- Undo inside a session ------------------------------------------------------------------
  * Each artist undoes and redoes their own strokes; everyone else's merged work stays. Undoing

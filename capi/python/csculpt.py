@@ -391,6 +391,8 @@ PROTOTYPES = {
     "csc_session_submit_changed": (_STATUS, [_SessionP, POINTER(csc_vertex_arrays), _U32P,
                                              c_uint32, c_uint32, POINTER(c_int32)]),
     "csc_session_update": (_STATUS, [_SessionP, POINTER(csc_vertex_arrays), _U32P]),
+    "csc_session_update_changed": (_STATUS, [_SessionP, POINTER(csc_vertex_arrays), _U32P,
+                                             c_uint32, _U32P]),
     "csc_session_record_stroke": (_STATUS, [_SessionP, POINTER(csc_vertex_arrays), _U32P,
                                             c_uint32, _FloatP]),
     "csc_session_undo": (_STATUS, [_SessionP, POINTER(csc_vertex_arrays), POINTER(_U32P), _U32P]),
@@ -1425,6 +1427,19 @@ class Session(_Handle):
         ptr, arrays, keep = self._arrays(positions, channels)
         applied = c_uint32()
         _lib.csc_session_update(ptr, ctypes.byref(arrays), ctypes.byref(applied))
+        del keep
+        return applied.value
+
+    def update_changed(self, positions, changed, channels=None) -> int:
+        """update() at the cost of what changed: `changed` lists the vertices the host changed
+        since its last submit of either kind, as for submit_changed(). Only those and the
+        vertices the session knows differ are compared, and only what the session changed is
+        written back. An unlisted change is neither found nor carried over by this call."""
+        ptr, arrays, keep = self._arrays(positions, channels)
+        indices = np.ascontiguousarray(changed, dtype=np.uint32).ravel()
+        applied = c_uint32()
+        _lib.csc_session_update_changed(ptr, ctypes.byref(arrays), indices.ctypes.data_as(_U32P),
+                                        indices.size, ctypes.byref(applied))
         del keep
         return applied.value
 

@@ -228,6 +228,29 @@ CSC_API csc_status csc_session_update(csc_session* session, const csc_vertex_arr
   });
 }
 
+CSC_API csc_status csc_session_update_changed(csc_session* session, const csc_vertex_arrays* local,
+                                              const uint32_t* changed, uint32_t count,
+                                              uint32_t* applied) {
+  return guarded("csc_session_update_changed", [&] {
+    csc_session& h = live_session(session);
+    const csc_vertex_arrays a = host_arrays(local, h.local, "local");
+    if (count > 0) require_pointer(changed, "changed");
+    const std::span<const std::uint32_t> listed(changed, count);
+    // The mirror equals the host's arrays but where the session keeps them differing from
+    // its version (the host may have moved those since) and where the host lists a change.
+    const std::span<const std::uint32_t> touched = h.session->touched();
+    h.synced.assign(touched.begin(), touched.end());
+    h.synced.insert(h.synced.end(), listed.begin(), listed.end());
+    copy_in_at(a, h.synced, h.local);
+    const std::size_t n = h.session->update(h.local, listed);
+    if (const auto written = h.session->written())
+      copy_out_at(h.local, *written, a);
+    else
+      copy_out(h.local, a);
+    if (applied) *applied = static_cast<uint32_t>(n);
+  });
+}
+
 CSC_API csc_status csc_session_poll(csc_session* session, csc_session_event* event,
                                     int32_t* has_event) {
   return guarded("csc_session_poll", [&] {

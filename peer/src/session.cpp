@@ -3,7 +3,9 @@
 #include "csculpt/peer/session.h"
 
 #include <algorithm>
+#include <cstring>
 #include <map>
+#include <optional>
 
 #include "attribution.h"
 #include "csculpt/diff.h"
@@ -50,6 +52,16 @@ struct Session::Impl {
   std::uint64_t next_sequence = 1;
   /// The digest of the edit last sent: an unchanged edit is not sent again.
   std::uint64_t last_submit_digest = 0;
+  /// How the host's mesh differed from the base when the session last wrote it (a submit, an
+  /// update, a resume): an update told the changed vertices compares those and `touched` with
+  /// it, not the whole mesh. `host_state_sent`: it is what the latest submit left.
+  Diff host_state;
+  bool host_state_sent = false;
+  /// What the last update() wrote into the host's mesh, each vertex once (`wrote_all`: maybe
+  /// every vertex), so the C ABI copies back only those; a mark per vertex while it is made.
+  std::vector<std::uint32_t> wrote;
+  std::vector<std::uint8_t> wrote_mark;
+  bool wrote_all = true;
   /// The vertices where the host's mesh may differ from the base, increasing: what the last
   /// submit sent, what a rebase left, what undo and redo wrote. Submits with the host's changed
   /// vertices capture over these and the changed ones only.
@@ -96,6 +108,8 @@ struct Session::Impl {
   /// Sends `d` (the host's edit from the base, captured from `local`) unless it is empty or was
   /// sent already; `local` then holds what the peers receive. False when nothing was sent.
   bool send(const Diff& d, Mesh& local, std::uint32_t strokes);
+  /// Throws InvalidInput naming the first of `changed` out of the mesh's range.
+  void require_in_range(std::span<const std::uint32_t> changed, const char* call) const;
   /// touched + `changed` (any order, repeats allowed) into `candidates`, increasing. Throws
   /// InvalidInput naming an index out of range before anything changes.
   void gather(std::span<const std::uint32_t> changed, const char* call);
@@ -103,13 +117,19 @@ struct Session::Impl {
   void retouch(const Mesh& local, std::span<const std::uint32_t> among);
   /// The same over every vertex (after a rebase, which is O(vertices) anyway).
   void retouch_all(const Mesh& local) {
-    touched.clear();
-    if (!local.positions.empty()) touched = csculpt::peer::touched(capture_diff(base, local));
+    host_state = local.positions.empty() ? Diff{} : capture_diff(base, local);
+    host_state_sent = false;
+    touched = csculpt::peer::touched(host_state);
   }
-  /// Whether `local` holds nothing but the base and the latest submit (no edit since).
-  bool holds_only_submitted(const Mesh& local) const {
-    return equals_base_plus(base, submitted.empty() ? nullptr : &submitted.rbegin()->second, local);
-  }
+  /// Whether `local` holds nothing but the base and the latest submit (no edit since),
+  /// comparing the whole mesh or, given the host's `changed` vertices, those and `touched`.
+  /// A value the host changed is checked (host_values.h) when it did edit.
+  bool holds_only_submitted(const Mesh& local, const std::span<const std::uint32_t>* changed);
+  /// update() with the host's changed vertices (null: compare the whole mesh).
+  std::size_t update(Mesh& local, const std::span<const std::uint32_t>* changed);
+  /// `vertices`, or `d`'s, were written into the host's mesh.
+  void note_written(std::span<const std::uint32_t> vertices);
+  void note_written(const Diff& d);
   /// Undo and redo write the host's mesh: what they `changed` joins the touched vertices.
   void written(std::span<const std::uint32_t> changed) {
     gather(changed, "undo");
@@ -315,6 +335,8 @@ bool Session::Impl::send(const Diff& d, Mesh& local, std::uint32_t strokes) {
   // Local now differs from the base at most where `sent` changes it.
   retouch(local, csculpt::peer::touched(sent));
   last_submit_digest = digest(captured);
+  host_state = captured;  // assigned into its kept capacity: no allocation per submit
+  host_state_sent = true;
   strokes_at[header.sequence] = unacknowledged_strokes;
   submitted[header.sequence] = std::move(sent);
   Command c;
@@ -340,14 +362,19 @@ std::pair<Mesh, std::uint64_t> Session::Impl::fork_base(const HostItem& item) {
   return from;
 }
 
-void Session::Impl::gather(std::span<const std::uint32_t> changed, const char* call) {
+void Session::Impl::require_in_range(std::span<const std::uint32_t> changed,
+                                     const char* call) const {
   const std::size_t n = base.vertex_count();
   for (const std::uint32_t v : changed)
     if (v >= n)
       throw InvalidInput(std::string(call) + ": changed vertex " + std::to_string(v) +
                          " is out of range (the session's mesh has " + std::to_string(n) +
                          " vertices)");
-  marked.resize(n, 0);
+}
+
+void Session::Impl::gather(std::span<const std::uint32_t> changed, const char* call) {
+  require_in_range(changed, call);
+  marked.resize(base.vertex_count(), 0);
   candidates.assign(touched.begin(), touched.end());
   for (const std::uint32_t v : touched) marked[v] = 1;
   for (const std::uint32_t v : changed)
@@ -420,11 +447,19 @@ bool Session::Impl::apply_versions(std::span<const HostItem> run, Mesh& local, b
   const auto keep_reverts = [&](std::size_t i, const Mesh& before) {
     reverts.record(run[i].version, run[i].merged, before);
   };
+  const bool empty = local.positions.empty();
   if (rebase_onto_versions(base, ours, merged, local, *merger, frame, known, keep_reverts)) {
     ++rebases;
     retouch_all(local);
+    wrote_all = true;
   } else {
     touched.clear();  // local is the new base (or empty)
+    host_state = Diff{};
+    host_state_sent = false;
+    wrote_all |= empty;
+    // Written sparsely: our submit's vertices back to the base, then each version's.
+    if (ours) note_written(*ours);
+    for (const Diff* d : merged) note_written(*d);
   }
   version = run.back().version;
   const bool resend = !submitted.empty() && submitted.rbegin()->first != merged_sequence;
@@ -434,53 +469,129 @@ bool Session::Impl::apply_versions(std::span<const HostItem> run, Mesh& local, b
   return resend;
 }
 
+void Session::Impl::note_written(std::span<const std::uint32_t> vertices) {
+  if (wrote_all) return;
+  wrote_mark.resize(base.vertex_count(), 0);
+  for (const std::uint32_t v : vertices)
+    if (!wrote_mark[v]) {
+      wrote_mark[v] = 1;
+      wrote.push_back(v);
+    }
+}
+
+void Session::Impl::note_written(const Diff& d) {
+  note_written(d.positions.indices);
+  for (const ChannelDiff& c : d.channels) note_written(c.change.indices);
+}
+
+namespace {
+
+bool same_values(const AttributeDiff& a, const AttributeDiff& b) {
+  return a.indices == b.indices && a.values.size() == b.values.size() &&
+         std::memcmp(a.values.data(), b.values.data(), a.values.size() * sizeof(float)) == 0;
+}
+
+/// Whether `a` and `b` make the same change, bit for bit (a channel one lacks changes nothing).
+bool same_change(const Diff& a, const Diff& b) {
+  if (!same_values(a.positions, b.positions)) return false;
+  static const AttributeDiff none;
+  for (std::size_t c = 0; c < std::max(a.channels.size(), b.channels.size()); ++c)
+    if (!same_values(c < a.channels.size() ? a.channels[c].change : none,
+                     c < b.channels.size() ? b.channels[c].change : none))
+      return false;
+  return true;
+}
+
+}  // namespace
+
+bool Session::Impl::holds_only_submitted(const Mesh& local,
+                                         const std::span<const std::uint32_t>* changed) {
+  if (changed == nullptr) {
+    if (equals_base_plus(base, submitted.empty() ? nullptr : &submitted.rbegin()->second, local))
+      return true;
+    check_host_values(local, base, frame, "update");
+    return false;
+  }
+  // The host changed nothing but `changed` since the session last wrote its mesh, which then
+  // differed from the base by host_state, over `touched`: the mesh is as the session left it,
+  // and that was the base plus the latest submit.
+  gather(*changed, "update");
+  capture_diff_at(base, local, candidates, captured);
+  const bool left_as_submitted = submitted.empty() ? same_change(host_state, Diff{})
+                                                   : host_state_sent;
+  if (left_as_submitted && same_change(captured, host_state)) return true;
+  check_diff_values(captured, base, frame, "update");
+  return false;
+}
+
 std::size_t Session::update(Mesh& local) {
-  Impl& s = *impl_;
+  return impl_->update(local, nullptr);
+}
+
+std::size_t Session::update(Mesh& local, std::span<const std::uint32_t> changed) {
+  return impl_->update(local, &changed);
+}
+
+std::optional<std::span<const std::uint32_t>> Session::written() const {
+  if (impl_->wrote_all) return std::nullopt;
+  return impl_->wrote;
+}
+
+std::size_t Session::Impl::update(Mesh& local, const std::span<const std::uint32_t>* changed) {
   std::size_t applied = 0;
+  for (const std::uint32_t v : wrote) wrote_mark[v] = 0;  // also after a call that threw
+  wrote.clear();
+  wrote_all = false;
   // A submit that a version did not include (it reached the merger after the merge, based on
   // the older version) is sent again, rebased, once the versions are applied: the host does
   // not have to notice.
   bool resend = false;
-  for (HostItem& item : s.node->host().take_items()) s.pending.push_back(std::move(item));
-  if (s.pending.empty()) return 0;  // hosts call this every frame: nothing to do is free
+  if (changed) require_in_range(*changed, "update");  // a host's mistake, even with no version
+  for (HostItem& item : node->host().take_items()) pending.push_back(std::move(item));
+  if (pending.empty()) return 0;  // hosts call this every frame: nothing to do is free
   // Refused before any version is applied: a bad value leaves them waiting for the next call.
   // A host that edited nothing since its submit holds only values the session checked.
   bool unedited = false;
-  if (s.has_base && !local.positions.empty()) {
-    s.ready_for(local, "update");
-    unedited = s.holds_only_submitted(local);
-    if (!unedited) check_host_values(local, s.base, s.frame, "update");
+  if (has_base && !local.positions.empty()) {
+    ready_for(local, "update");
+    unedited = holds_only_submitted(local, changed);
   }
   std::size_t done = 0;  // pending[0, done) are applied: a failure keeps the rest for the next call
   try {
-    while (done < s.pending.size()) {
-      const HostItem& item = s.pending[done];
+    while (done < pending.size()) {
+      const HostItem& item = pending[done];
       std::size_t n = 1;
       if (item.snapshot) {
         // Edits submitted but not in the snapshot, or a lost branch's carried over: sent again.
-        resend |= !s.submitted.empty() || (s.has_base && item.fork.value_or(0) < s.version);
-        s.apply_snapshot(item, local);
+        resend |= !submitted.empty() || (has_base && item.fork.value_or(0) < version);
+        apply_snapshot(item, local);
+        wrote_all = true;
         ++applied;
-      } else if (item.version == s.version + 1) {  // always: the node hands them in order
+      } else if (item.version == version + 1) {  // always: the node hands them in order
         // With the versions that follow it, up to a snapshot: one rebase for them all.
-        while (done + n < s.pending.size() && !s.pending[done + n].snapshot &&
-               s.pending[done + n].version == item.version + n)
+        while (done + n < pending.size() && !pending[done + n].snapshot &&
+               pending[done + n].version == item.version + n)
           ++n;
-        resend |= s.apply_versions({s.pending.data() + done, n}, local, unedited);
+        resend |= apply_versions({pending.data() + done, n}, local, unedited);
         applied += n;
       }
       done += n;
-      unedited = s.touched.empty();  // exact after a version or snapshot: local is the base
+      unedited = touched.empty();  // exact after a version or snapshot: local is the base
     }
   } catch (...) {
-    s.versions_applied += applied;
-    s.pending.erase(s.pending.begin(), s.pending.begin() + static_cast<std::ptrdiff_t>(done));
+    versions_applied += applied;
+    pending.erase(pending.begin(), pending.begin() + static_cast<std::ptrdiff_t>(done));
     throw;
   }
-  s.pending.clear();
-  s.versions_applied += applied;
+  pending.clear();
+  versions_applied += applied;
   // The touched vertices are exact after a rebase: the resend need not capture the whole mesh.
-  if (resend && !local.positions.empty()) submit(local, 0, {});
+  if (resend && !local.positions.empty()) {
+    gather({}, "update");
+    capture_diff_at(base, local, candidates, captured);
+    send(captured, local, 0);
+    note_written(candidates);  // the wire's rounding of what was sent
+  }
   return applied;
 }
 

@@ -239,6 +239,59 @@ TEST(CapiSession, ASubmitOfTheChangedVerticesReachesThePeerAndABadIndexIsRefused
   csc_mesh_destroy(mesh);
 }
 
+TEST(CapiSession, AnUpdateOfTheChangedVerticesAppliesAndRebasesAsTheWholeUpdateDoes) {
+  csc_mesh* mesh = grid(24);
+  csc_session *a = nullptr, *b = nullptr;
+  const csc_session_options oa = fast(1), ob = fast(2);
+  ASSERT_EQ(csc_session_create(&a, mesh, &oa), CSC_OK) << csc_last_error();
+  ASSERT_EQ(csc_session_join(&b, csc_session_invite(a), &ob), CSC_OK) << csc_last_error();
+  HostArrays ha(mesh), hb(mesh);
+  csc_vertex_arrays va = ha.arrays(), vb = hb.arrays();
+  const std::vector<std::uint32_t> sent_b = {7, 41};
+  for (const std::uint32_t v : sent_b) hb.positions[3 * v + 2] += 0.2f;
+  ASSERT_EQ(csc_session_submit_changed(b, &vb, sent_b.data(), 2, 1, nullptr), CSC_OK);
+  const std::vector<std::uint32_t> kept_a = {500};  // a's edit, not submitted: rebased
+  ha.positions[3 * 500 + 1] += 0.1f;
+  const float a_value = ha.positions[3 * 500 + 1];
+  const std::vector<std::uint32_t> bad = {va.vertex_count};
+  EXPECT_EQ(csc_session_update_changed(a, &va, bad.data(), 1, nullptr), CSC_ERROR_INVALID_INPUT);
+  EXPECT_NE(std::string(csc_last_error()).find(std::to_string(va.vertex_count)),
+            std::string::npos)
+      << csc_last_error();
+  EXPECT_EQ(csc_session_update_changed(a, &va, nullptr, 1, nullptr), CSC_ERROR_INVALID_ARGUMENT);
+  uint32_t applied_a = 0, applied_b = 0;
+  ASSERT_TRUE(wait_for([&] {
+    uint32_t n = 0;
+    EXPECT_EQ(csc_session_update_changed(a, &va, kept_a.data(), 1, &n), CSC_OK);
+    applied_a += n;
+    EXPECT_EQ(csc_session_update_changed(b, &vb, nullptr, 0, &n), CSC_OK);
+    applied_b += n;
+    return csc_session_version(a) >= 1 && csc_session_version(b) >= 1;
+  }));
+  EXPECT_EQ(applied_a, 1u);
+  EXPECT_EQ(applied_b, 1u);
+  // b edited nothing beyond its submit: its arrays are the agreed mesh, bit for bit.
+  csc_mesh* base_b = nullptr;
+  ASSERT_EQ(csc_session_copy_base(&base_b, b), CSC_OK);
+  EXPECT_TRUE(hb == HostArrays(base_b));
+  // a has b's edit and keeps its own.
+  EXPECT_EQ(ha.positions[3 * 41 + 2], hb.positions[3 * 41 + 2]);
+  EXPECT_EQ(ha.positions[3 * 500 + 1], a_value);
+  // Sent, merged and applied on both: the same mesh.
+  int32_t sent = 0;
+  ASSERT_EQ(csc_session_submit_changed(a, &va, kept_a.data(), 1, 1, &sent), CSC_OK);
+  EXPECT_EQ(sent, 1);
+  ASSERT_TRUE(wait_for([&] {
+    csc_session_update_changed(a, &va, nullptr, 0, nullptr);
+    csc_session_update_changed(b, &vb, nullptr, 0, nullptr);
+    return csc_session_version(a) >= 2 && csc_session_version(b) >= 2 && ha == hb;
+  }));
+  csc_mesh_destroy(base_b);
+  csc_session_destroy(b);
+  csc_session_destroy(a);
+  csc_mesh_destroy(mesh);
+}
+
 TEST(CapiSession, PresenceAndPeersCrossTheAbi) {
   csc_mesh* mesh = grid(16);
   csc_session_options oa = fast(1), ob = fast(2);

@@ -1,9 +1,11 @@
-// Submits that list the host's changed vertices (Session::submit with `changed`): the same
-// edits, versions and meshes as whole-mesh submits, bit for bit, through rebases; the touched
-// set after a rebase; refusals; a change the host did not list.
+// Submits and updates that list the host's changed vertices (Session::submit and update with
+// `changed`): the same edits, versions and meshes as whole-mesh calls, bit for bit, through
+// rebases; what an update wrote back; the touched set after a rebase; refusals; a change the
+// host did not list.
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -35,12 +37,24 @@ std::vector<std::uint32_t> as_vector(std::span<const std::uint32_t> s) {
   return {s.begin(), s.end()};
 }
 
-/// A host that submits either the whole mesh or the vertices its strokes changed.
+/// Copies vertex `v` (position and every channel) from `from` to `to` (same layout).
+void copy_vertex(const Mesh& from, Mesh& to, std::uint32_t v) {
+  to.positions[v] = from.positions[v];
+  for (std::size_t c = 0; c < from.channels.size(); ++c) {
+    const std::size_t w = from.channels[c].desc.width;
+    std::copy_n(from.channels[c].values.begin() + static_cast<std::ptrdiff_t>(v * w), w,
+                to.channels[c].values.begin() + static_cast<std::ptrdiff_t>(v * w));
+  }
+}
+
+/// A host that submits and updates either with the whole mesh or with the vertices its
+/// strokes changed.
 struct Host {
   std::unique_ptr<Session> session;
   Mesh local;
   bool listed = false;
   std::vector<std::uint32_t> changed;  // since the last submit
+  std::size_t sparse_updates = 0;      // updates that wrote back a list of vertices
 
   void stroke(const Stroke& s) { apply_stroke(local, s, nullptr, &changed); }
   bool submit(std::uint32_t strokes) {
@@ -55,17 +69,29 @@ struct Host {
   /// Applies the versions up to `v` once the network thread holds them.
   void update_to(std::uint64_t v) {
     ASSERT_TRUE(wait_until([&] { return session->stats().version >= v; }));
-    session->update(local);
+    // A host mirroring `local` (as the C ABI does) copies back only what update wrote.
+    Mesh mirror = local;
+    if (listed)
+      session->update(local, changed);
+    else
+      session->update(local);
     ASSERT_EQ(session->version(), v);
+    if (const auto written = session->written()) {
+      ++sparse_updates;
+      EXPECT_LT(written->size(), local.vertex_count());
+      for (const std::uint32_t w : *written) copy_vertex(local, mirror, w);
+      EXPECT_EQ(mesh_digest(mirror), mesh_digest(local)) << "update wrote more than it listed";
+    }
     // The touched set is exact after a version: the vertices where local is not the base.
     EXPECT_EQ(as_vector(session->touched()), differing(session->base(), local));
   }
 };
 
 /// Two hosts play a script in which every version merges one submit while the other host has
-/// edits of its own beyond it (so both rebase); the digests of both hosts' meshes and bases
-/// after every version.
-std::vector<std::uint64_t> play_script(bool listed) {
+/// edits of its own beyond it (so both rebase), then versions neither host edited beyond (so
+/// the update writes sparsely); the digests of both hosts' meshes and bases after every
+/// version, and how many updates wrote a list of vertices back.
+std::vector<std::uint64_t> play_script(bool listed, std::size_t* sparse = nullptr) {
   const Mesh sphere = make_sphere(3000, /*materials=*/true);
   Host a{Session::create(sphere, fast_options(1)), sphere, listed, {}};
   Host b{Session::join(a.session->invite(), fast_options(2)), {}, listed, {}};
@@ -105,12 +131,15 @@ std::vector<std::uint64_t> play_script(bool listed) {
   EXPECT_EQ(mesh_digest(a.local), mesh_digest(b.local));  // converged, nothing left unmerged
   EXPECT_EQ(mesh_digest(a.local), mesh_digest(a.session->base()));
   EXPECT_GE(b.session->stats().rebases, 8u);
+  if (sparse) *sparse = a.sparse_updates + b.sparse_updates;
   return digests;
 }
 
 TEST(SessionChanged, ListedSubmitsMergeBitIdenticallyToWholeMeshSubmitsThroughRebases) {
+  std::size_t sparse = 0;
   const std::vector<std::uint64_t> whole = play_script(false);
-  const std::vector<std::uint64_t> listed = play_script(true);
+  const std::vector<std::uint64_t> listed = play_script(true, &sparse);
+  EXPECT_GE(sparse, 3u);  // the last two versions, on both hosts: no edit beyond the submit
   ASSERT_EQ(whole.size(), listed.size());
   for (std::size_t i = 0; i < whole.size(); ++i) EXPECT_EQ(whole[i], listed[i]) << "digest " << i;
 }
@@ -140,6 +169,39 @@ TEST(SessionChanged, AnIndexOutOfRangeIsRefusedByNameAndNothingIsSent) {
   EXPECT_EQ(a.session->stats().strokes_submitted, 1u);
   EXPECT_FALSE(a.session->touched().empty());
   EXPECT_FALSE(a.session->submit(a.local, 0, {}));  // nothing new
+}
+
+TEST(SessionChanged, AListedUpdateRefusesABadIndexOrValueByNameAndAppliesNothing) {
+  const Mesh sphere = make_sphere(2000, true);
+  Host a{Session::create(sphere, fast_options(1)), sphere, true, {}};
+  Host b{Session::join(a.session->invite(), fast_options(2)), {}, true, {}};
+  b.local = b.session->base();
+  a.stroke(scripted_strokes(sphere, 3, 1)[0]);
+  EXPECT_TRUE(a.submit(1));
+  ASSERT_TRUE(wait_until([&] { return b.session->stats().version >= 1; }));
+  const auto n = static_cast<std::uint32_t>(sphere.vertex_count());
+  const std::vector<std::uint32_t> out_of_range{n + 2};
+  try {
+    b.session->update(b.local, out_of_range);
+    ADD_FAILURE() << "an index out of range was accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("changed vertex " + std::to_string(n + 2)),
+              std::string::npos)
+        << e.what();
+  }
+  b.local.positions[7].y = std::numeric_limits<float>::quiet_NaN();
+  b.changed = {7};
+  try {
+    b.session->update(b.local, b.changed);
+    ADD_FAILURE() << "a NaN the host listed was accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("vertex 7"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(b.session->version(), 0u);  // nothing applied
+  b.local.positions[7] = sphere.positions[7];
+  b.update_to(1);  // the next good call applies the version
+  a.update_to(1);
+  EXPECT_EQ(mesh_digest(a.local), mesh_digest(b.local));
 }
 
 TEST(SessionChanged, AVertexChangedButNotListedArrivesOnceListed) {

@@ -406,10 +406,12 @@ class Lifetime(unittest.TestCase):
             self.assertFalse(np.array_equal(meshes.bits(p), meshes.bits(before)))
             self.assertFalse(s.submit_changed(p, [], c))  # nothing new
             expected = p.copy()
-            wait_for(lambda: s.update(p, c) > 0 or s.version >= 1, "version 1")
+            wait_for(lambda: s.update_changed(p, [], c) > 0 or s.version >= 1, "version 1")
             with s.base() as agreed:
                 np.testing.assert_array_equal(meshes.bits(agreed.positions), meshes.bits(expected))
             self.assertEqual(s.stats.strokes_submitted, 1)
+            with self.assertRaisesRegex(csculpt.InvalidInput, f"changed vertex {len(p)}"):
+                s.update_changed(p, [len(p)], c)
 
     def test_close_context_manager_and_garbage_collection(self):
         with material_sphere(1) as mesh:

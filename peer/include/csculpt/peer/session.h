@@ -18,6 +18,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -234,7 +235,7 @@ class Session {
   /// the edit over those and `changed` only; the edit sent is the same as submit(local, strokes)
   /// would send when every change is listed. A change of a vertex the host does not list is not
   /// sent until a later call lists it, a whole-mesh submit sends it, or an update that applies
-  /// a version finds it (update compares the whole mesh). Throws InvalidInput naming an index
+  /// a version finds it (update(local) compares the whole mesh). Throws InvalidInput naming an index
   /// out of range (nothing is sent or changed).
   bool submit(Mesh& local, std::uint32_t strokes, std::span<const std::uint32_t> changed);
   /// The vertices where the host's mesh may differ from base() as far as the session knows,
@@ -248,6 +249,18 @@ class Session {
   /// version did not include (it reached the merger after the merge) is sent again, rebased,
   /// at once. Returns the number of versions applied.
   std::size_t update(Mesh& local);
+  /// The same at the cost of what changed instead of the whole mesh: `changed` lists the
+  /// vertices the host changed since its last submit of either kind, as for submit(local,
+  /// strokes, changed) (what undo() and redo() wrote need not be listed). The session looks
+  /// for edits since the submit at those and touched() only; an unlisted change is then
+  /// neither found nor carried over by this update (it stays in `local`, unsent, until a call
+  /// lists it or a whole-mesh submit sends it). Throws InvalidInput naming an index out of
+  /// range or a bad value (nothing is applied).
+  std::size_t update(Mesh& local, std::span<const std::uint32_t> changed);
+  /// What the last update() wrote into `local`: the vertices, each once, or nullopt when it
+  /// may have written any (a snapshot, a rebase of edits made since the submit, a first
+  /// update on an empty mesh). A host mirroring `local` copies back those only.
+  std::optional<std::span<const std::uint32_t>> written() const;
   /// Records a stroke the host just ended on `local`, for undo(): the vertices it changed and
   /// their values before it (per vertex: the position, then every channel's values in the
   /// session mesh's channel order). Recording drops the strokes that could be redone; the
