@@ -25,9 +25,11 @@ std::vector<std::uint32_t> touched(const Diff& d) {
 std::vector<float> change_amounts(const Diff& d, const Mesh& base,
                                   std::span<const std::uint32_t> vertices, float scale) {
   std::vector<float> amount(vertices.size(), 0.f);
+  // Every index list is increasing and a subset of `vertices`: one cursor walks each.
+  std::size_t at = 0;
   auto slot = [&](std::uint32_t v) {
-    return static_cast<std::size_t>(std::lower_bound(vertices.begin(), vertices.end(), v) -
-                                    vertices.begin());
+    while (vertices[at] < v) ++at;
+    return at;
   };
   for (std::size_t i = 0; i < d.positions.indices.size(); ++i) {
     const std::uint32_t v = d.positions.indices[i];
@@ -41,6 +43,7 @@ std::vector<float> change_amounts(const Diff& d, const Mesh& base,
     if (k < 0) continue;
     const auto& values = base.channels[static_cast<std::size_t>(k)].values;
     const std::uint32_t w = c.desc.width;
+    at = 0;
     for (std::size_t i = 0; i < c.change.indices.size(); ++i) {
       const std::uint32_t v = c.change.indices[i];
       float sum = 0;

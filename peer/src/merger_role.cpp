@@ -63,11 +63,11 @@ MergeOutcome MergerRole::merge(const Mesh& base, std::uint64_t version, std::uin
   header.author = "merge";
   MergeOutcome out;
   VersionRecord& r = out.record;
-  r.diff_bytes = encode_diff(merged, base, header, session_wire_options(wire, frame));
+  r.diff_bytes = encode_diff(merged, base, header, session_wire_options(wire, frame), &out.decoded);
   r.merge_ms = std::chrono::duration<float, std::milli>(Clock::now() - t0).count();
   r.version = version + 1;
   r.parent_chain = chain;
-  r.chain = next_chain(chain, decode_diff(r.diff_bytes, base));
+  r.chain = next_chain(chain, out.decoded);
   std::vector<std::vector<std::uint32_t>> sets;
   for (const Diff* d : diffs) sets.push_back(touched(*d));
   const std::vector<bool> conflicting = conflicts(sets, base.vertex_count());

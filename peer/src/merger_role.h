@@ -32,6 +32,7 @@ struct PendingSubmit {
 /// A merge's result: the version to publish and what it cost.
 struct MergeOutcome {
   VersionRecord record;
+  Diff decoded;  ///< the record's diff as every peer decodes it (Replication::append)
   std::uint32_t merged_strokes = 0;
 };
 

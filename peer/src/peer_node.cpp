@@ -153,6 +153,10 @@ void PeerNode::publish_stats() {
     s.auth_rejected += rejected;
     s.handshakes_abandoned += abandoned;
   });
+  publish_peers();
+}
+
+void PeerNode::publish_peers() {
   host_.set_peers(peer_table_.list(membership_, election_.merger(), reported_));
 }
 
@@ -467,8 +471,9 @@ void PeerNode::greet_lost(Clock::time_point now) {
 void PeerNode::departed(PeerId peer, const char* how) {
   if (merger_) merger_->forget(peer);
   reported_.erase(peer);
-  host_.update_presence([&](PresenceTable& t) { t.forget(peer); });
   peer_table_.departed(peer);
+  publish_peers();  // before its cursor goes: a host that sees it gone sees the peer left
+  host_.update_presence([&](PresenceTable& t) { t.forget(peer); });
   event(EventKind::peer_left, peer, how);
 }
 
@@ -481,8 +486,14 @@ void PeerNode::report_revived() {
 // ---- replication glue -------------------------------------------------------------------------
 
 /// Applies a version that follows ours, hands it to the host and keeps it for fetches.
-void PeerNode::apply_version(VersionRecord r) {
-  Diff merged = replication_.accept(std::move(r), base_);
+void PeerNode::apply_version(VersionRecord r, Diff* merged_here) {
+  Diff merged;
+  if (merged_here) {
+    merged = std::move(*merged_here);
+    replication_.append(std::move(r), merged, base_);
+  } else {
+    merged = replication_.accept(std::move(r), base_);
+  }
   const VersionRecord& kept = replication_.latest();
   const std::uint64_t version = replication_.version();
   // Submits held for the old version (a merger catching up by fetch) no longer apply: their
@@ -659,7 +670,7 @@ void PeerNode::merge_pending() {
   const std::uint32_t folds = merger_->count_last_folds(base_);  // base_: the merged-on mesh
   const std::uint32_t conflicting = o.record.conflicting;
   const float merge_ms = o.record.merge_ms;
-  apply_version(std::move(o.record));
+  apply_version(std::move(o.record), &o.decoded);
   // After applying, so a reader never sees a merge counted before its version.
   const std::size_t others = membership_.others().size();
   host_.update_stats([&](SessionStats& s) {

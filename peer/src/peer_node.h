@@ -103,11 +103,15 @@ class PeerNode {
   void elect();
   void expire(Clock::time_point now);
   void departed(PeerId peer, const char* how);
+  /// Hands the host the peers' list as it stands now.
+  void publish_peers();
   void greet_lost(Clock::time_point now);
   void report_revived();
 
   // replication glue
-  void apply_version(VersionRecord r);
+  /// Accepts `r` (decoding and checking it), or appends it with `merged_here`, the diff this
+  /// peer's merge decoded (moved from), and hands it to the host.
+  void apply_version(VersionRecord r, Diff* merged_here = nullptr);
   void drain_buffered();
   void add_contributions(const VersionRecord& r);
   void check_divergence(PeerId merger, std::uint64_t version, std::uint64_t chain,

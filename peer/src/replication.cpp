@@ -63,6 +63,11 @@ Diff Replication::accept(VersionRecord r, Mesh& base) {
                        std::to_string(header.base_version));
   if (next_chain(chain_, merged) != r.chain)
     throw InvalidInput("version " + std::to_string(r.version) + " fails its hash chain");
+  append(std::move(r), merged, base);
+  return merged;
+}
+
+void Replication::append(VersionRecord r, const Diff& merged, Mesh& base) {
   apply_diff(merged, base);
   version_ = r.version;
   chain_ = r.chain;
@@ -78,7 +83,6 @@ Diff Replication::accept(VersionRecord r, Mesh& base) {
     history_bytes_ -= history_.front().diff_bytes.size();
     history_.pop_front();
   }
-  return merged;
 }
 
 std::optional<std::uint64_t> Replication::chain_at(std::uint64_t version) const {

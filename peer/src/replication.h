@@ -63,6 +63,9 @@ class Replication {
   /// answer fetches. Returns the decoded diff. Throws InvalidInput, leaving everything as it
   /// was, for a version that does not follow ours or fails its chain.
   Diff accept(VersionRecord r, Mesh& base);
+  /// The same for a version this peer merged, whose decoded diff (`merged`, the merger's
+  /// encode gave it) and chain it made itself: nothing to decode or check again.
+  void append(VersionRecord r, const Diff& merged, Mesh& base);
   /// The version accept() last kept.
   const VersionRecord& latest() const { return history_.back(); }
 

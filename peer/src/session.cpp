@@ -34,6 +34,27 @@ std::uint64_t mesh_digest(const Mesh& mesh) {
   return h;
 }
 
+namespace {
+
+bool same_values(const AttributeDiff& a, const AttributeDiff& b) {
+  return a.indices == b.indices && a.values.size() == b.values.size() &&
+         (a.values.empty() ||
+          std::memcmp(a.values.data(), b.values.data(), a.values.size() * sizeof(float)) == 0);
+}
+
+/// Whether `a` and `b` make the same change, bit for bit (a channel one lacks changes nothing).
+bool same_change(const Diff& a, const Diff& b) {
+  if (!same_values(a.positions, b.positions)) return false;
+  static const AttributeDiff none;
+  for (std::size_t c = 0; c < std::max(a.channels.size(), b.channels.size()); ++c)
+    if (!same_values(c < a.channels.size() ? a.channels[c].change : none,
+                     c < b.channels.size() ? b.channels[c].change : none))
+      return false;
+  return true;
+}
+
+}  // namespace
+
 struct Session::Impl {
   std::unique_ptr<PeerNode> node;
   SessionOptions options;
@@ -50,11 +71,10 @@ struct Session::Impl {
   /// names the one it includes.
   std::map<std::uint64_t, Diff> submitted;
   std::uint64_t next_sequence = 1;
-  /// The digest of the edit last sent: an unchanged edit is not sent again.
-  std::uint64_t last_submit_digest = 0;
   /// How the host's mesh differed from the base when the session last wrote it (a submit, an
   /// update, a resume): an update told the changed vertices compares those and `touched` with
-  /// it, not the whole mesh. `host_state_sent`: it is what the latest submit left.
+  /// it, not the whole mesh. `host_state_sent`: it is what the latest submit left (an edit
+  /// equal to it is not sent again).
   Diff host_state;
   bool host_state_sent = false;
   /// What the last update() wrote into the host's mesh, each vertex once (`wrote_all`: maybe
@@ -263,7 +283,6 @@ bool Session::Impl::replay_journal(const std::optional<OwnEdit>& own, Mesh& loca
     restore_when_due();
   }
   retouch_all(local);      // the restored edit differs from the base
-  last_submit_digest = 0;  // what was sent before the restart is sent again
   const bool unmerged = !equals_base_plus(base, nullptr, local);
   // Counted from the restart on: the strokes still unacknowledged are submitted again.
   if (!unmerged) unacknowledged_strokes = 0;
@@ -313,7 +332,7 @@ bool Session::Impl::send(const Diff& d, Mesh& local, std::uint32_t strokes) {
   const bool empty =
       d.positions.empty() && std::all_of(d.channels.begin(), d.channels.end(),
                                          [](const auto& c) { return c.change.empty(); });
-  if (empty || digest(d) == last_submit_digest) {
+  if (empty || (host_state_sent && same_change(d, host_state))) {
     // Nothing new to send: these strokes changed nothing the session does not hold or is not
     // already sent, so they are acknowledged as they are (not left unacknowledged for ever).
     strokes_submitted += strokes;
@@ -326,15 +345,14 @@ bool Session::Impl::send(const Diff& d, Mesh& local, std::uint32_t strokes) {
   header.base_version = version;
   header.sequence = next_sequence++;
   header.author = options.name;
-  Bytes bytes = encode_diff(d, base, header, session_wire_options(options.wire, frame));
-  Diff sent = decode_diff(bytes, base);
+  Diff sent;  // what the peers decode
+  Bytes bytes = encode_diff(d, base, header, session_wire_options(options.wire, frame), &sent);
   // The host's values become what the peers receive: changed vertices the quantisation left
   // out go back to the base, the others to their decoded values.
   restore(base, d, local);
   apply_diff(sent, local);
   // Local now differs from the base at most where `sent` changes it.
   retouch(local, csculpt::peer::touched(sent));
-  last_submit_digest = digest(captured);
   host_state = captured;  // assigned into its kept capacity: no allocation per submit
   host_state_sent = true;
   strokes_at[header.sequence] = unacknowledged_strokes;
@@ -409,7 +427,6 @@ void Session::Impl::apply_snapshot(const HostItem& item, Mesh& local) {
   version = item.version;
   submitted.clear();
   strokes_at.clear();  // those submits are not in the snapshot: their strokes go out again
-  last_submit_digest = 0;
   ensure_merge_state();
   retouch_all(local);
 }
@@ -465,7 +482,6 @@ bool Session::Impl::apply_versions(std::span<const HostItem> run, Mesh& local, b
   const bool resend = !submitted.empty() && submitted.rbegin()->first != merged_sequence;
   submitted.clear();
   strokes_at.clear();
-  last_submit_digest = 0;
   return resend;
 }
 
@@ -483,26 +499,6 @@ void Session::Impl::note_written(const Diff& d) {
   note_written(d.positions.indices);
   for (const ChannelDiff& c : d.channels) note_written(c.change.indices);
 }
-
-namespace {
-
-bool same_values(const AttributeDiff& a, const AttributeDiff& b) {
-  return a.indices == b.indices && a.values.size() == b.values.size() &&
-         std::memcmp(a.values.data(), b.values.data(), a.values.size() * sizeof(float)) == 0;
-}
-
-/// Whether `a` and `b` make the same change, bit for bit (a channel one lacks changes nothing).
-bool same_change(const Diff& a, const Diff& b) {
-  if (!same_values(a.positions, b.positions)) return false;
-  static const AttributeDiff none;
-  for (std::size_t c = 0; c < std::max(a.channels.size(), b.channels.size()); ++c)
-    if (!same_values(c < a.channels.size() ? a.channels[c].change : none,
-                     c < b.channels.size() ? b.channels[c].change : none))
-      return false;
-  return true;
-}
-
-}  // namespace
 
 bool Session::Impl::holds_only_submitted(const Mesh& local,
                                          const std::span<const std::uint32_t>* changed) {

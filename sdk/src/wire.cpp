@@ -41,9 +41,28 @@ struct EncodedAttribute {
   double step = 0;
 };
 
-/// `base` holds `width` floats per vertex of the base mesh.
+/// What decode_attribute makes of `e`, without reading it back: the kept vertices and the
+/// values base + q x step, computed as the decoder computes them (bit for bit).
+void decoded_attribute(const AttributeDiff& change, const float* base, std::uint32_t width,
+                       const std::vector<std::uint32_t>& kept, const std::vector<std::int64_t>& q,
+                       double step, AttributeDiff& out) {
+  if (step == 0) {  // sent as float bits
+    out = change;
+    return;
+  }
+  out.indices = kept;
+  out.values.resize(q.size());
+  for (std::size_t i = 0; i < kept.size(); ++i)
+    for (std::uint32_t c = 0; c < width; ++c)
+      out.values[i * width + c] = static_cast<float>(
+          double(base[std::size_t{kept[i]} * width + c]) + double(q[i * width + c]) * step);
+}
+
+/// `base` holds `width` floats per vertex of the base mesh. `decoded` (may be null) gets what
+/// a receiver decodes.
 EncodedAttribute encode_attribute(const AttributeDiff& change, const float* base,
-                                  std::uint32_t width, double tolerance) {
+                                  std::uint32_t width, double tolerance,
+                                  AttributeDiff* decoded) {
   EncodedAttribute e;
   const std::size_t n = change.indices.size();
   const double step = step_per_tolerance * tolerance;
@@ -74,6 +93,7 @@ EncodedAttribute encode_attribute(const AttributeDiff& change, const float* base
     }
   }
   if (!quantise) {
+    if (decoded) decoded_attribute(change, base, width, kept, q, 0, *decoded);
     e.count = static_cast<std::uint32_t>(n);
     put_index_gaps(change.indices, e.index_gaps);
     e.values.resize(change.values.size() * sizeof(float));
@@ -83,6 +103,7 @@ EncodedAttribute encode_attribute(const AttributeDiff& change, const float* base
   }
   e.count = static_cast<std::uint32_t>(kept.size());
   e.step = step;
+  if (decoded) decoded_attribute(change, base, width, kept, q, step, *decoded);
   put_index_gaps(kept, e.index_gaps);
   // Planar, plain and predicted; keep the smaller.
   std::vector<std::uint8_t> plain, predicted;
@@ -261,7 +282,7 @@ void decode_attribute(const fb::AttributeChanges* a, const float* base, std::uin
 }  // namespace
 
 std::vector<std::uint8_t> encode_diff(const Diff& diff, const Mesh& base, const DiffHeader& header,
-                                      const EncodeOptions& options) {
+                                      const EncodeOptions& options, Diff* decoded) {
   validate(diff, base, "encode_diff");
   if (header.author.size() > max_author_bytes)
     throw InvalidInput("encode_diff: author is " + std::to_string(header.author.size()) +
@@ -273,17 +294,29 @@ std::vector<std::uint8_t> encode_diff(const Diff& diff, const Mesh& base, const 
   if (scale == 0 && options.position_tolerance > 0) scale = bbox_diagonal(base.positions);
   if (scale == 0) scale = 1;  // a point-like mesh: the tolerance is absolute
 
+  if (decoded) {  // as decode_diff makes it: every channel of the base, in the base's order
+    decoded->vertex_count = diff.vertex_count;
+    decoded->channels.resize(base.channels.size());
+    for (std::size_t c = 0; c < base.channels.size(); ++c) {
+      decoded->channels[c].desc = base.channels[c].desc;
+      decoded->channels[c].change.indices.clear();
+      decoded->channels[c].change.values.clear();
+    }
+  }
   flatbuffers::FlatBufferBuilder b(1024 + diff.positions.size() * 8);
   static_assert(sizeof(Vec3f) == 3 * sizeof(float));
   const auto positions = build_attribute(
       b, encode_attribute(diff.positions, reinterpret_cast<const float*>(base.positions.data()), 3,
-                          options.position_tolerance * scale));
+                          options.position_tolerance * scale,
+                          decoded ? &decoded->positions : nullptr));
   std::vector<flatbuffers::Offset<fb::ChannelChanges>> channels;
   for (const ChannelDiff& c : diff.channels) {
     if (c.change.empty()) continue;
-    const Channel& bc = base.channels[static_cast<std::size_t>(base.find_channel(c.desc.name))];
+    const auto k = static_cast<std::size_t>(base.find_channel(c.desc.name));
+    const Channel& bc = base.channels[k];
     const auto changes = build_attribute(
-        b, encode_attribute(c.change, bc.values.data(), c.desc.width, options.channel_tolerance));
+        b, encode_attribute(c.change, bc.values.data(), c.desc.width, options.channel_tolerance,
+                            decoded ? &decoded->channels[k].change : nullptr));
     channels.push_back(
         fb::CreateChannelChanges(b, b.CreateString(c.desc.name), c.desc.width, changes));
   }

@@ -162,10 +162,18 @@ BoundReport check_round_trip(const Mesh& base, const Diff& original, const Diff&
   return worst;
 }
 
+/// Encodes and decodes; every round trip also checks that the decoded diff encode_diff gives
+/// is what decode_diff reads, bit for bit, in the same layout (every base channel, in order).
 Diff round_trip(const Diff& d, const Mesh& base, const EncodeOptions& o, Bytes* bytes = nullptr) {
-  const Bytes b = encode_diff(d, base, DiffHeader{}, o);
+  Diff from_encoder;
+  const Bytes b = encode_diff(d, base, DiffHeader{}, o, &from_encoder);
   if (bytes) *bytes = b;
-  return decode_diff(b, base);
+  Diff decoded = decode_diff(b, base);
+  EXPECT_TRUE(same_bits(from_encoder, decoded));
+  EXPECT_EQ(from_encoder.channels.size(), decoded.channels.size());
+  for (std::size_t c = 0; c < decoded.channels.size() && c < from_encoder.channels.size(); ++c)
+    EXPECT_EQ(from_encoder.channels[c].desc.name, decoded.channels[c].desc.name);
+  return decoded;
 }
 
 // Tolerance pairs (relative position, absolute channel) from coarse to fine.
