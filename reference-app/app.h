@@ -88,6 +88,8 @@ class App final : public InputHandlers {
   void draw_remote_cursors();
   // bench.cpp
   int run_bench();
+  /** One JSON line of the dab times measured since they were last cleared. */
+  void print_dabs(const char* mode);
 
   AppOptions options_;
   GLFWwindow* window_ = nullptr;

@@ -100,6 +100,7 @@ void App::continue_stroke() {
 void App::end_stroke() {
   if (drag_ == Drag::stroke) {
     sculptor_.grab_end();
+    sculptor_.stroke_ended();
     history_.end_stroke(document_);
     // Handed over when it ends (sent then, never mid-stroke), with what undo needs.
     if (session_.active() && history_.has_last())

@@ -7,7 +7,7 @@
 
 namespace {
 
-constexpr uint32_t kLeafSize = 4;
+constexpr uint32_t kLeafSize = 8;
 constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
 
 glm::vec3 vertex(const std::vector<float>& positions, uint32_t v) {
@@ -46,18 +46,21 @@ void TriangleBvh::build(const std::vector<float>& positions,
                     vertex(positions, triangles[3 * t + 2])) /
                    3.f;
   }
-  if (count > 0) build_node(positions, triangles, centroids, 0, count, kNone);
-  refit_stamp_.assign(nodes_.size(), 0);
-  refit_epoch_ = 0;
+  depth_.clear();
+  if (count > 0) build_node(positions, triangles, centroids, 0, count, kNone, 0);
+  assign_vertices(triangles, positions.size() / 3);
+  for (Marks* m : {&growing_marks_, &loose_marks_, &tighten_marks_}) m->resize(nodes_.size());
+  loose_.clear();
 }
 
 uint32_t TriangleBvh::build_node(const std::vector<float>& positions,
                                  const std::vector<uint32_t>& triangles,
                                  std::vector<glm::vec3>& centroids, uint32_t begin, uint32_t end,
-                                 uint32_t parent) {
+                                 uint32_t parent, uint8_t depth) {
   const uint32_t index = static_cast<uint32_t>(nodes_.size());
   nodes_.emplace_back();
   parent_.push_back(parent);
+  depth_.push_back(depth);
   if (end - begin <= kLeafSize) {
     nodes_[index].first = begin;
     nodes_[index].count = end - begin;
@@ -76,14 +79,33 @@ uint32_t TriangleBvh::build_node(const std::vector<float>& positions,
   const uint32_t middle = begin + (end - begin) / 2;
   std::nth_element(order_.begin() + begin, order_.begin() + middle, order_.begin() + end,
                    [&](uint32_t a, uint32_t b) { return centroids[a][axis] < centroids[b][axis]; });
-  build_node(positions, triangles, centroids, begin, middle, index);
-  const uint32_t right = build_node(positions, triangles, centroids, middle, end, index);
+  const auto below = static_cast<uint8_t>(depth + 1);  // median splits: depth ~ log2(leaves)
+  build_node(positions, triangles, centroids, begin, middle, index, below);
+  const uint32_t right = build_node(positions, triangles, centroids, middle, end, index, below);
   Node& node = nodes_[index];
   node.first = right;
   node.count = 0;
   node.lo = glm::min(nodes_[index + 1].lo, nodes_[right].lo);
   node.hi = glm::max(nodes_[index + 1].hi, nodes_[right].hi);
   return index;
+}
+
+void TriangleBvh::assign_vertices(const std::vector<uint32_t>& triangles, size_t vertex_count) {
+  std::vector<uint8_t> taken(vertex_count, 0);
+  owned_.clear();
+  owned_begin_.assign(nodes_.size() + 1, 0);
+  for (uint32_t n = 0; n < nodes_.size(); ++n) {
+    owned_begin_[n] = static_cast<uint32_t>(owned_.size());
+    const Node& node = nodes_[n];
+    for (uint32_t i = node.first; node.count > 0 && i < node.first + node.count; ++i)
+      for (int c = 0; c < 3; ++c) {
+        const uint32_t v = triangles[3 * size_t{order_[i]} + c];
+        if (taken[v]) continue;
+        taken[v] = 1;
+        owned_.push_back(v);
+      }
+  }
+  owned_begin_[nodes_.size()] = static_cast<uint32_t>(owned_.size());
 }
 
 void TriangleBvh::fit_leaf(Node& node, const std::vector<float>& positions,
@@ -100,29 +122,57 @@ void TriangleBvh::fit_leaf(Node& node, const std::vector<float>& positions,
 
 void TriangleBvh::refit(const std::vector<float>& positions, const std::vector<uint32_t>& triangles,
                         std::span<const uint32_t> changed_triangles) {
-  if (++refit_epoch_ == 0) {  // the stamps wrapped: clear them once every 2^32 refits
-    std::fill(refit_stamp_.begin(), refit_stamp_.end(), 0);
-    refit_epoch_ = 1;
-  }
-  refit_nodes_.clear();
-  for (uint32_t t : changed_triangles)
-    for (uint32_t n = leaf_of_triangle_[t]; n != kNone && refit_stamp_[n] != refit_epoch_;
-         n = parent_[n]) {
-      refit_stamp_[n] = refit_epoch_;
-      refit_nodes_.push_back(n);
+  // Grown, not refitted: a changed triangle's corners (which the caller just read for its
+  // normal) are added to its leaf; then each grown leaf's ancestors grow as far as needed.
+  for (uint32_t t : changed_triangles) {
+    const uint32_t leaf = leaf_of_triangle_[t];
+    Node& node = nodes_[leaf];
+    for (int c = 0; c < 3; ++c) {
+      const glm::vec3 p = vertex(positions, triangles[3 * size_t{t} + c]);
+      node.lo = glm::min(node.lo, p);
+      node.hi = glm::max(node.hi, p);
     }
-  // Children have larger indices than their parent: refitting in decreasing order visits
-  // every child before its parent.
-  std::sort(refit_nodes_.begin(), refit_nodes_.end(), std::greater<>());
-  for (uint32_t n : refit_nodes_) {
-    Node& node = nodes_[n];
-    if (node.count > 0) {
-      fit_leaf(node, positions, triangles);
-    } else {
+    if (growing_marks_.mark(leaf)) growing_.push_back(leaf);
+  }
+  for (uint32_t leaf : growing_) {
+    if (loose_marks_.mark(leaf)) loose_.push_back(leaf);
+    for (uint32_t child = leaf, n = parent_[leaf]; n != kNone; child = n, n = parent_[n]) {
+      Node& node = nodes_[n];
+      const glm::vec3 lo = glm::min(node.lo, nodes_[child].lo);
+      const glm::vec3 hi = glm::max(node.hi, nodes_[child].hi);
+      if (lo == node.lo && hi == node.hi) break;  // holds it: so does every ancestor
+      node.lo = lo;
+      node.hi = hi;
+    }
+  }
+  growing_marks_.clear(growing_);
+  growing_.clear();
+}
+
+void TriangleBvh::tighten(const std::vector<float>& positions,
+                          const std::vector<uint32_t>& triangles) {
+  for (uint32_t leaf : loose_) {
+    fit_leaf(nodes_[leaf], positions, triangles);
+    for (uint32_t n = parent_[leaf]; n != kNone && tighten_marks_.mark(n); n = parent_[n]) {
+      tightening_.push_back(n);
+      if (depth_[n] >= by_depth_.size()) by_depth_.resize(depth_[n] + 1u);
+      by_depth_[depth_[n]].push_back(n);
+    }
+  }
+  // Deepest first, so every child is exact before its parent (bucketed by depth: sorting the
+  // thousands of nodes a stroke touches would cost as much as refitting them).
+  for (size_t d = by_depth_.size(); d-- > 0;) {
+    for (uint32_t n : by_depth_[d]) {
+      Node& node = nodes_[n];
       node.lo = glm::min(nodes_[n + 1].lo, nodes_[node.first].lo);
       node.hi = glm::max(nodes_[n + 1].hi, nodes_[node.first].hi);
     }
+    by_depth_[d].clear();
   }
+  tighten_marks_.clear(tightening_);
+  tightening_.clear();
+  loose_marks_.clear(loose_);
+  loose_.clear();
 }
 
 RayHit TriangleBvh::raycast(const std::vector<float>& positions,

@@ -1,7 +1,8 @@
 // A bounding-volume hierarchy over the mesh's triangles for the brush's hit test and its
 // region query. Built once per mesh layout; after a dab only the boxes above the changed
 // triangles are refitted (the topology never changes while sculpting, so the tree stays valid,
-// only looser where the surface moved far).
+// only looser where the surface moved far). Each vertex belongs to one leaf holding a triangle
+// of it, so the region query visits each vertex once, not once per triangle around it.
 #pragma once
 
 #include <glm/vec3.hpp>
@@ -9,6 +10,8 @@
 #include <cstdint>
 #include <span>
 #include <vector>
+
+#include "marks.h"
 
 struct RayHit {
   bool hit = false;
@@ -20,15 +23,21 @@ struct RayHit {
 class TriangleBvh {
  public:
   void build(const std::vector<float>& positions, const std::vector<uint32_t>& triangles);
-  /** Refits the boxes of `changed_triangles` and their ancestors. */
+  /** Grows the leaves of `changed_triangles` to hold them where they moved, and their
+   *  ancestors as far as they must (cheap enough for every dab: most stop at the leaf). A box
+   *  may then be larger than it needs be, never too small, until tighten(). */
   void refit(const std::vector<float>& positions, const std::vector<uint32_t>& triangles,
              std::span<const uint32_t> changed_triangles);
+  /** Refits exactly every box refit() grew since the last call, and their ancestors (at the
+   *  end of a stroke, after an undo or a merged version). */
+  void tighten(const std::vector<float>& positions, const std::vector<uint32_t>& triangles);
   /** The nearest triangle the ray crosses (either side). */
   RayHit raycast(const std::vector<float>& positions, const std::vector<uint32_t>& triangles,
                  glm::vec3 origin, glm::vec3 direction) const;
-  /** Calls visit(triangle) for every triangle whose box meets the sphere. */
+  /** Calls visit(vertex) once for every vertex of a triangle whose leaf's box meets the sphere
+   *  (every vertex inside the sphere among them). */
   template <typename Visit>
-  void for_each_triangle_near(glm::vec3 center, float radius, Visit&& visit) const;
+  void for_each_vertex_near(glm::vec3 center, float radius, Visit&& visit) const;
 
   size_t node_count() const { return nodes_.size(); }
 
@@ -40,19 +49,27 @@ class TriangleBvh {
   };
   uint32_t build_node(const std::vector<float>& positions, const std::vector<uint32_t>& triangles,
                       std::vector<glm::vec3>& centroids, uint32_t begin, uint32_t end,
-                      uint32_t parent);
+                      uint32_t parent, uint8_t depth);
+  /** Gives each vertex to the first leaf (in node order) holding a triangle of it. */
+  void assign_vertices(const std::vector<uint32_t>& triangles, size_t vertex_count);
   void fit_leaf(Node& node, const std::vector<float>& positions,
                 const std::vector<uint32_t>& triangles) const;
 
   std::vector<Node> nodes_;  // pre-order: children come after their parent
   std::vector<uint32_t> order_, parent_, leaf_of_triangle_;
-  std::vector<uint32_t> refit_stamp_, refit_nodes_;  // scratch, reused between refits
-  uint32_t refit_epoch_ = 0;
+  std::vector<uint8_t> depth_;  // of each node: refits go deepest first
+  // The vertices node n owns: owned_[owned_begin_[n] .. owned_begin_[n + 1]) (leaves only).
+  std::vector<uint32_t> owned_, owned_begin_;
+  // Scratch reused between refits: the leaves one refit grows, the leaves grown since the
+  // last tighten (they and their ancestors may be loose), and tighten's nodes by depth.
+  Marks growing_marks_, loose_marks_, tighten_marks_;
+  std::vector<uint32_t> growing_, loose_, tightening_;
+  std::vector<std::vector<uint32_t>> by_depth_;
   mutable std::vector<uint32_t> stack_;
 };
 
 template <typename Visit>
-void TriangleBvh::for_each_triangle_near(glm::vec3 center, float radius, Visit&& visit) const {
+void TriangleBvh::for_each_vertex_near(glm::vec3 center, float radius, Visit&& visit) const {
   if (nodes_.empty()) return;
   stack_.clear();
   stack_.push_back(0);
@@ -70,7 +87,7 @@ void TriangleBvh::for_each_triangle_near(glm::vec3 center, float radius, Visit&&
     }
     if (d2 > r2) continue;
     if (node.count > 0) {
-      for (uint32_t i = node.first; i < node.first + node.count; ++i) visit(order_[i]);
+      for (uint32_t i = owned_begin_[index]; i < owned_begin_[index + 1]; ++i) visit(owned_[i]);
     } else {
       stack_.push_back(node.first);
       stack_.push_back(index + 1);

@@ -195,19 +195,29 @@ void MeshDocument::build_topology() {
   }
 }
 
+void MeshDocument::recompute_face_normals(std::span<const uint32_t> faces) {
+  for (uint32_t t : faces) {
+    const uint32_t* tri = &triangles[3 * size_t{t}];
+    const float* a = &positions[3 * size_t{tri[0]}];
+    const float* b = &positions[3 * size_t{tri[1]}];
+    const float* c = &positions[3 * size_t{tri[2]}];
+    const float e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const float e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    float* n = &face_normals[3 * size_t{t}];
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+  }
+}
+
 void MeshDocument::recompute_normals(std::span<const uint32_t> vertices) {
   for (uint32_t v : vertices) {
     float n[3] = {0.f, 0.f, 0.f};
     for (uint32_t k = vertex_triangle_offsets[v]; k < vertex_triangle_offsets[v + 1]; ++k) {
-      const uint32_t* tri = &triangles[3 * size_t{vertex_triangles[k]}];
-      const float* a = &positions[3 * size_t{tri[0]}];
-      const float* b = &positions[3 * size_t{tri[1]}];
-      const float* c = &positions[3 * size_t{tri[2]}];
-      const float e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-      const float e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-      n[0] += e1[1] * e2[2] - e1[2] * e2[1];
-      n[1] += e1[2] * e2[0] - e1[0] * e2[2];
-      n[2] += e1[0] * e2[1] - e1[1] * e2[0];
+      const float* f = &face_normals[3 * size_t{vertex_triangles[k]}];
+      n[0] += f[0];
+      n[1] += f[1];
+      n[2] += f[2];
     }
     const float length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
     const float scale = length > 0.f ? 1.f / length : 0.f;
@@ -216,8 +226,10 @@ void MeshDocument::recompute_normals(std::span<const uint32_t> vertices) {
 }
 
 void MeshDocument::recompute_all_normals() {
+  face_normals.assign(triangles.size(), 0.f);
+  std::vector<uint32_t> all(std::max(vertex_count(), triangle_count()));
+  for (uint32_t i = 0; i < all.size(); ++i) all[i] = i;
+  recompute_face_normals(std::span(all).first(triangle_count()));
   normals.assign(positions.size(), 0.f);
-  std::vector<uint32_t> all(vertex_count());
-  for (uint32_t v = 0; v < all.size(); ++v) all[v] = v;
-  recompute_normals(all);
+  recompute_normals(std::span(all).first(vertex_count()));
 }

@@ -43,8 +43,12 @@ class MeshDocument {
   void copy_vertex_values(uint32_t vertex, float* out) const;
   void set_vertex_values(uint32_t vertex, const float* in);
 
-  /** Recomputes the normals of `vertices` (area-weighted face normals, summed in a fixed
-   *  order so equal positions give bit-identical normals: an undone stroke redraws the same). */
+  /** Recomputes the face normals of `triangles` from their positions (each once per change,
+   *  not once per corner). */
+  void recompute_face_normals(std::span<const uint32_t> triangles);
+  /** Recomputes the normals of `vertices` from the face normals around them (area-weighted,
+   *  summed in a fixed order so equal positions give bit-identical normals: an undone stroke
+   *  redraws the same). Their triangles' face normals must be current. */
   void recompute_normals(std::span<const uint32_t> vertices);
   void recompute_all_normals();
 
@@ -52,6 +56,7 @@ class MeshDocument {
   std::vector<uint32_t> triangles;
   std::vector<MeshChannel> channels;
   std::vector<float> normals;
+  std::vector<float> face_normals;  // per triangle, unnormalised (twice its area)
   int albedo = -1, metallic = -1, roughness = -1;  // channel indices
   std::string label;                               // file name or "built-in sphere"
 

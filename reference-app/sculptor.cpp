@@ -21,11 +21,9 @@ glm::vec3 rotate_about(glm::vec3 v, glm::vec3 axis, float angle) {  // Rodrigues
 
 void Sculptor::reset() {
   const size_t vertices = document_.vertex_count();
-  region_stamp_.assign(vertices, 0);
-  normal_stamp_.assign(vertices, 0);
+  normal_marks_.resize(vertices);
   dirty_stamp_.assign(vertices, 0);
-  triangle_stamp_.assign(document_.triangle_count(), 0);
-  region_epoch_ = triangle_epoch_ = normal_epoch_ = 0;
+  triangle_marks_.resize(document_.triangle_count());
   dirty_epoch_ = 1;
   dirty_.clear();
   grab_entries_.clear();
@@ -66,24 +64,17 @@ std::span<const glm::vec3> Sculptor::mirrors(const BrushSettings& settings) {
 void Sculptor::gather_region(glm::vec3 center, float radius, glm::vec3 view_direction,
                              bool front_only, Falloff falloff) {
   region_.clear();
-  const uint32_t stamp = next_stamp(region_stamp_, region_epoch_);
-  bvh_.for_each_triangle_near(center, radius, [&](uint32_t t) {
-    for (int c = 0; c < 3; ++c) {
-      const uint32_t v = document_.triangles[3 * size_t{t} + c];
-      if (region_stamp_[v] == stamp) continue;
-      region_stamp_[v] = stamp;
-      const float distance = glm::length(position(v) - center);
-      if (distance > radius) continue;
-      const float* n = &document_.normals[3 * size_t{v}];
-      if (front_only && glm::dot(glm::vec3(n[0], n[1], n[2]), view_direction) > 0.f) continue;
-      const float weight = falloff_weight(falloff, distance / radius);
-      if (weight > 0.f) region_.push_back({v, weight});
-    }
+  bvh_.for_each_vertex_near(center, radius, [&](uint32_t v) {
+    const float distance = glm::length(position(v) - center);
+    if (distance > radius) return;
+    const float* n = &document_.normals[3 * size_t{v}];
+    if (front_only && glm::dot(glm::vec3(n[0], n[1], n[2]), view_direction) > 0.f) return;
+    const float weight = falloff_weight(falloff, distance / radius);
+    if (weight > 0.f) region_.push_back({v, weight});
   });
-  // The BVH visits leaves in an order that depends on the refits; sorting makes every result
-  // (sums, undo records) independent of it.
-  std::sort(region_.begin(), region_.end(),
-            [](const RegionVertex& a, const RegionVertex& b) { return a.vertex < b.vertex; });
+  // The order is the tree's (leaves left to right, each one's vertices as built), whichever
+  // leaves the refitted boxes let the query visit: every sum and undo record is the same
+  // for the same mesh, without sorting.
 }
 
 void Sculptor::dab(const DabInput& input, const BrushSettings& settings) {
@@ -98,7 +89,7 @@ void Sculptor::dab(const DabInput& input, const BrushSettings& settings) {
     apply(mirrored, settings, input.center * m, parity);
     last_dab_vertices_ += static_cast<uint32_t>(region_.size());
   }
-  refresh_after_change(changed_, input.kind != BrushKind::paint);
+  refresh(changed_, input.kind != BrushKind::paint);
 }
 
 void Sculptor::apply(const DabInput& input, const BrushSettings& settings, glm::vec3 center,
@@ -231,10 +222,15 @@ void Sculptor::grab_move(glm::vec3 delta) {
     changed_.push_back(e.vertex);
   }
   last_dab_vertices_ = static_cast<uint32_t>(grab_entries_.size());
-  refresh_after_change(changed_, true);
+  refresh(changed_, true);
 }
 
 void Sculptor::refresh_after_change(std::span<const uint32_t> vertices, bool positions_changed) {
+  refresh(vertices, positions_changed);
+  bvh_.tighten(document_.positions, document_.triangles);
+}
+
+void Sculptor::refresh(std::span<const uint32_t> vertices, bool positions_changed) {
   auto mark_dirty = [&](uint32_t v) {
     if (dirty_stamp_[v] == dirty_epoch_) return;
     dirty_stamp_[v] = dirty_epoch_;
@@ -245,24 +241,22 @@ void Sculptor::refresh_after_change(std::span<const uint32_t> vertices, bool pos
     return;
   }
   // A moved vertex changes the normals of every corner of its triangles.
-  const uint32_t triangle_stamp = next_stamp(triangle_stamp_, triangle_epoch_);
-  const uint32_t normal_stamp = next_stamp(normal_stamp_, normal_epoch_);
   changed_triangles_.clear();
   normal_vertices_.clear();
   for (uint32_t v : vertices)
     for (uint32_t k = document_.vertex_triangle_offsets[v];
          k < document_.vertex_triangle_offsets[v + 1]; ++k) {
       const uint32_t t = document_.vertex_triangles[k];
-      if (triangle_stamp_[t] == triangle_stamp) continue;
-      triangle_stamp_[t] = triangle_stamp;
+      if (!triangle_marks_.mark(t)) continue;
       changed_triangles_.push_back(t);
       for (int c = 0; c < 3; ++c) {
         const uint32_t corner = document_.triangles[3 * size_t{t} + c];
-        if (normal_stamp_[corner] == normal_stamp) continue;
-        normal_stamp_[corner] = normal_stamp;
-        normal_vertices_.push_back(corner);
+        if (normal_marks_.mark(corner)) normal_vertices_.push_back(corner);
       }
     }
+  triangle_marks_.clear(changed_triangles_);
+  normal_marks_.clear(normal_vertices_);
+  document_.recompute_face_normals(changed_triangles_);
   document_.recompute_normals(normal_vertices_);
   bvh_.refit(document_.positions, document_.triangles, changed_triangles_);
   for (uint32_t v : normal_vertices_) mark_dirty(v);

@@ -12,6 +12,7 @@
 
 #include "brush.h"
 #include "bvh.h"
+#include "marks.h"
 #include "mesh_document.h"
 #include "stroke_history.h"
 
@@ -36,8 +37,10 @@ class Sculptor {
   void grab_begin(const DabInput& input, const BrushSettings& settings);
   void grab_move(glm::vec3 delta);
   void grab_end() { grab_entries_.clear(); }
+  /** The stroke's dabs left the BVH's upper boxes loose (cheap per dab): tightened once. */
+  void stroke_ended() { bvh_.tighten(document_.positions, document_.triangles); }
 
-  /** After positions (or only channels) of `vertices` changed by any means (a dab, undo, a
+  /** After positions (or only channels) of `vertices` changed outside a stroke (undo, a
    *  merged version): normals around them, BVH boxes, and the renderer's queue. */
   void refresh_after_change(std::span<const uint32_t> vertices, bool positions_changed);
   /** Vertices to re-upload (unique, unsorted); the renderer clears it. */
@@ -61,6 +64,8 @@ class Sculptor {
   void apply(const DabInput& input, const BrushSettings& settings, glm::vec3 center, float parity);
   std::span<const glm::vec3> mirrors(const BrushSettings& settings);
   uint32_t next_stamp(std::vector<uint32_t>& stamps, uint32_t& epoch);
+  /** refresh_after_change within a stroke: the BVH's upper boxes only grow. */
+  void refresh(std::span<const uint32_t> vertices, bool positions_changed);
   glm::vec3 position(uint32_t v) const;
   void set_position(uint32_t v, glm::vec3 p);
 
@@ -71,8 +76,9 @@ class Sculptor {
   std::vector<RegionVertex> region_;
   std::vector<glm::vec3> targets_;
   std::vector<glm::vec3> mirrors_;
-  std::vector<uint32_t> region_stamp_, triangle_stamp_, normal_stamp_, dirty_stamp_;
-  uint32_t region_epoch_ = 0, triangle_epoch_ = 0, normal_epoch_ = 0, dirty_epoch_ = 1;
+  Marks triangle_marks_, normal_marks_;  // clear between dabs
+  std::vector<uint32_t> dirty_stamp_;
+  uint32_t dirty_epoch_ = 1;
   std::vector<uint32_t> changed_, changed_triangles_, normal_vertices_, dirty_;
   std::vector<GrabEntry> grab_entries_;
   uint32_t last_dab_vertices_ = 0;

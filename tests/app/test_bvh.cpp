@@ -1,0 +1,104 @@
+// The brush's spatial index (reference-app/bvh.cpp): after any sequence of dabs that move
+// vertices (refit grows boxes, tighten refits them exactly), the region query finds exactly
+// the vertices a brute-force search finds, each once, and a ray hits what brute force hits.
+#include <gtest/gtest.h>
+
+#include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "bvh.h"
+#include "icosphere.h"
+
+namespace {
+
+glm::vec3 at(const TriangleMesh& m, uint32_t v) {
+  return {m.positions[3 * size_t{v}], m.positions[3 * size_t{v} + 1],
+          m.positions[3 * size_t{v} + 2]};
+}
+
+std::vector<uint32_t> query(const TriangleBvh& bvh, const TriangleMesh& m, glm::vec3 c, float r) {
+  std::vector<uint32_t> out;
+  bvh.for_each_vertex_near(c, r, [&](uint32_t v) {
+    if (glm::length(at(m, v) - c) <= r) out.push_back(v);
+  });
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::vector<uint32_t> brute_force(const TriangleMesh& m, glm::vec3 c, float r) {
+  std::vector<bool> used(m.positions.size() / 3, false);
+  for (uint32_t v : m.triangles) used[v] = true;
+  std::vector<uint32_t> out;
+  for (uint32_t v = 0; v < used.size(); ++v)
+    if (used[v] && glm::length(at(m, v) - c) <= r) out.push_back(v);
+  return out;
+}
+
+/// Moves the vertices within `r` of `c` outward by up to `depth` (a draw dab), returning the
+/// triangles around them.
+std::vector<uint32_t> dab(TriangleMesh& m, glm::vec3 c, float r, float depth) {
+  std::vector<bool> moved(m.positions.size() / 3, false);
+  for (uint32_t v = 0; v < moved.size(); ++v) {
+    const float d = glm::length(at(m, v) - c);
+    if (d > r) continue;
+    const glm::vec3 p = at(m, v) * (1.f + depth * (1.f - d / r));
+    for (int k = 0; k < 3; ++k) m.positions[3 * size_t{v} + k] = p[k];
+    moved[v] = true;
+  }
+  std::vector<uint32_t> triangles;
+  for (uint32_t t = 0; t < m.triangles.size() / 3; ++t)
+    if (moved[m.triangles[3 * t]] || moved[m.triangles[3 * t + 1]] || moved[m.triangles[3 * t + 2]])
+      triangles.push_back(t);
+  return triangles;
+}
+
+TEST(AppBvh, QueriesAndRaysMatchBruteForceThroughGrownAndTightenedRefits) {
+  TriangleMesh m = make_geodesic_sphere(20000);
+  TriangleBvh bvh;
+  bvh.build(m.positions, m.triangles);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-1.f, 1.f);
+  auto random_point = [&] { return glm::normalize(glm::vec3(u(rng), u(rng), u(rng))); };
+  for (int step = 0; step < 60; ++step) {
+    // A stroke of dabs pushing out (and, every other stroke, in), tightened at its end.
+    const glm::vec3 c = random_point();
+    const float depth = step % 2 ? -0.15f : 0.3f;
+    const std::vector<uint32_t> changed = dab(m, c, 0.3f, depth);
+    bvh.refit(m.positions, m.triangles, changed);
+    if (step % 3 == 2) bvh.tighten(m.positions, m.triangles);
+    for (int q = 0; q < 5; ++q) {
+      const glm::vec3 qc = q == 0 ? c * 1.2f : random_point() * (0.8f + 0.4f * (u(rng) + 1.f));
+      const float qr = 0.1f + 0.2f * (u(rng) + 1.f);
+      // Each vertex once: query() would show a repeat as a duplicate.
+      std::vector<uint32_t> found = query(bvh, m, qc, qr);
+      EXPECT_TRUE(std::adjacent_find(found.begin(), found.end()) == found.end());
+      ASSERT_EQ(found, brute_force(m, qc, qr)) << "step " << step << " query " << q;
+    }
+    // A ray from outside towards the centre hits the nearest triangle brute force finds.
+    const glm::vec3 origin = random_point() * 3.f, direction = glm::normalize(-origin);
+    const RayHit hit = bvh.raycast(m.positions, m.triangles, origin, direction);
+    ASSERT_TRUE(hit.hit);
+    float nearest = INFINITY;
+    for (uint32_t t = 0; t < m.triangles.size() / 3; ++t) {
+      const glm::vec3 a = at(m, m.triangles[3 * t]);
+      const glm::vec3 e1 = at(m, m.triangles[3 * t + 1]) - a, e2 = at(m, m.triangles[3 * t + 2]) - a;
+      const glm::vec3 p = glm::cross(direction, e2);
+      const float det = glm::dot(e1, p);
+      if (std::abs(det) < 1e-12f) continue;
+      const glm::vec3 s = origin - a;
+      const float bu = glm::dot(s, p) / det;
+      const glm::vec3 qv = glm::cross(s, e1);
+      const float bv = glm::dot(direction, qv) / det;
+      const float d = glm::dot(e2, qv) / det;
+      if (bu >= 0.f && bv >= 0.f && bu + bv <= 1.f && d > 0.f) nearest = std::min(nearest, d);
+    }
+    EXPECT_NEAR(hit.distance, nearest, 1e-4f) << "step " << step;
+  }
+}
+
+}  // namespace
