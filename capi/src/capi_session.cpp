@@ -195,20 +195,33 @@ CSC_API csc_status csc_session_submit(csc_session* session, const csc_vertex_arr
   });
 }
 
+namespace {
+
+/// The host's listed vertices (`changed`, `count`), after copying the host's values of them
+/// and of the vertices the session keeps as touched into the mirror: the mirror equals the
+/// host's arrays but there (the host may have moved those since). They stay in h.synced.
+std::span<const std::uint32_t> sync_listed(csc_session& h, const csc_vertex_arrays& a,
+                                           const uint32_t* changed, uint32_t count) {
+  if (count > 0) require_pointer(changed, "changed");
+  const std::span<const std::uint32_t> listed(changed, count);
+  const std::span<const std::uint32_t> touched = h.session->touched();
+  h.synced.assign(touched.begin(), touched.end());
+  h.synced.insert(h.synced.end(), listed.begin(), listed.end());
+  copy_in_at(a, h.synced, h.local);
+  return listed;
+}
+
+}  // namespace
+
 CSC_API csc_status csc_session_submit_changed(csc_session* session, const csc_vertex_arrays* local,
                                               const uint32_t* changed, uint32_t count,
                                               uint32_t strokes, int32_t* sent) {
   return guarded("csc_session_submit_changed", [&] {
     csc_session& h = live_session(session);
     const csc_vertex_arrays a = host_arrays(local, h.local, "local");
-    if (count > 0) require_pointer(changed, "changed");
-    const std::span<const std::uint32_t> listed(changed, count);
     // The session may write the vertices it holds as touched and the listed ones: both are
     // copied in (the host's current values) and, once sent, out.
-    const std::span<const std::uint32_t> touched = h.session->touched();
-    h.synced.assign(touched.begin(), touched.end());
-    h.synced.insert(h.synced.end(), listed.begin(), listed.end());
-    copy_in_at(a, h.synced, h.local);
+    const std::span<const std::uint32_t> listed = sync_listed(h, a, changed, count);
     // Bad host values (NaN/Inf) and indices out of range are refused before anything is sent.
     const bool did = h.session->submit(h.local, strokes, listed);
     if (did) copy_out_at(h.local, h.synced, a);
@@ -234,14 +247,8 @@ CSC_API csc_status csc_session_update_changed(csc_session* session, const csc_ve
   return guarded("csc_session_update_changed", [&] {
     csc_session& h = live_session(session);
     const csc_vertex_arrays a = host_arrays(local, h.local, "local");
-    if (count > 0) require_pointer(changed, "changed");
-    const std::span<const std::uint32_t> listed(changed, count);
-    // The mirror equals the host's arrays but where the session keeps them differing from
-    // its version (the host may have moved those since) and where the host lists a change.
-    const std::span<const std::uint32_t> touched = h.session->touched();
-    h.synced.assign(touched.begin(), touched.end());
-    h.synced.insert(h.synced.end(), listed.begin(), listed.end());
-    copy_in_at(a, h.synced, h.local);
+    const std::span<const std::uint32_t> listed = sync_listed(h, a, changed, count);
+    // Only what the session wrote goes back (all of it after a snapshot or a rebase).
     const std::size_t n = h.session->update(h.local, listed);
     if (const auto written = h.session->written())
       copy_out_at(h.local, *written, a);

@@ -198,12 +198,17 @@ bool wait_for(const std::function<bool()>& done) {
   return done();
 }
 
-TEST(CapiSession, ASubmitOfTheChangedVerticesReachesThePeerAndABadIndexIsRefused) {
-  csc_mesh* mesh = grid(24);
-  csc_session *a = nullptr, *b = nullptr;
+/// Peer 1 creates a session on `mesh`, peer 2 joins it.
+void start_pair(const csc_mesh* mesh, csc_session*& a, csc_session*& b) {
   const csc_session_options oa = fast(1), ob = fast(2);
   ASSERT_EQ(csc_session_create(&a, mesh, &oa), CSC_OK) << csc_last_error();
   ASSERT_EQ(csc_session_join(&b, csc_session_invite(a), &ob), CSC_OK) << csc_last_error();
+}
+
+TEST(CapiSession, ASubmitOfTheChangedVerticesReachesThePeerAndABadIndexIsRefused) {
+  csc_mesh* mesh = grid(24);
+  csc_session *a = nullptr, *b = nullptr;
+  ASSERT_NO_FATAL_FAILURE(start_pair(mesh, a, b));
   HostArrays ha(mesh), hb(mesh);
   csc_vertex_arrays va = ha.arrays(), vb = hb.arrays();
   // b lifts three vertices and paints one; listed backwards, with a repeat
@@ -242,9 +247,7 @@ TEST(CapiSession, ASubmitOfTheChangedVerticesReachesThePeerAndABadIndexIsRefused
 TEST(CapiSession, AnUpdateOfTheChangedVerticesAppliesAndRebasesAsTheWholeUpdateDoes) {
   csc_mesh* mesh = grid(24);
   csc_session *a = nullptr, *b = nullptr;
-  const csc_session_options oa = fast(1), ob = fast(2);
-  ASSERT_EQ(csc_session_create(&a, mesh, &oa), CSC_OK) << csc_last_error();
-  ASSERT_EQ(csc_session_join(&b, csc_session_invite(a), &ob), CSC_OK) << csc_last_error();
+  ASSERT_NO_FATAL_FAILURE(start_pair(mesh, a, b));
   HostArrays ha(mesh), hb(mesh);
   csc_vertex_arrays va = ha.arrays(), vb = hb.arrays();
   const std::vector<std::uint32_t> sent_b = {7, 41};
