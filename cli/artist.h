@@ -47,6 +47,9 @@ class SimulatedArtist {
   /// Takes the merged versions in (Session::update, told the changed vertices unless the
   /// artist submits the whole mesh); the number applied.
   std::size_t update();
+  /// The host changed `vertex` of local() outside the artist's strokes (a marker): listed
+  /// with the next submit and update like the strokes' vertices, or neither would find it.
+  void changed(std::uint32_t vertex) { changed_.push_back(vertex); }
 
   /// Submits the edit (the changed vertices, or the whole mesh; see ArtistOptions) with
   /// `strokes`; what Session::submit returns.

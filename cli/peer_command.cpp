@@ -295,6 +295,7 @@ void mark(peer::Session& session, SimulatedArtist& artist, MarkerPainter& marker
   while (markers.made() < artist.strokes()) {
     const std::int64_t v = markers.paint(artist.local());
     if (v < 0) break;
+    artist.changed(static_cast<std::uint32_t>(v));
     Line("marker").num("id", session.id()).num("vertex", static_cast<std::uint64_t>(v)).emit();
   }
   const std::vector<std::uint32_t> seen = markers.newly_acknowledged(session.base());
