@@ -248,12 +248,22 @@ CSC_API csc_status csc_session_update_changed(csc_session* session, const csc_ve
     csc_session& h = live_session(session);
     const csc_vertex_arrays a = host_arrays(local, h.local, "local");
     const std::span<const std::uint32_t> listed = sync_listed(h, a, changed, count);
-    // Only what the session wrote goes back (all of it after a snapshot or a rebase).
-    const std::size_t n = h.session->update(h.local, listed);
-    if (const auto written = h.session->written())
-      copy_out_at(h.local, *written, a);
-    else
-      copy_out(h.local, a);
+    // Only what the session wrote goes back (all of it after a snapshot or a rebase), also
+    // when it failed: the mirror and the host's arrays never part.
+    const auto copy_back = [&] {
+      if (const auto written = h.session->written())
+        copy_out_at(h.local, *written, a);
+      else
+        copy_out(h.local, a);
+    };
+    std::size_t n = 0;
+    try {
+      n = h.session->update(h.local, listed);
+    } catch (...) {
+      copy_back();
+      throw;
+    }
+    copy_back();
     if (applied) *applied = static_cast<uint32_t>(n);
   });
 }

@@ -577,6 +577,7 @@ std::size_t Session::Impl::update(Mesh& local, const std::span<const std::uint32
   } catch (...) {
     versions_applied += applied;
     pending.erase(pending.begin(), pending.begin() + static_cast<std::ptrdiff_t>(done));
+    wrote_all = true;  // a version may be half written: a mirror takes the whole mesh back
     throw;
   }
   pending.clear();

@@ -259,7 +259,8 @@ class Session {
   std::size_t update(Mesh& local, std::span<const std::uint32_t> changed);
   /// What the last update() wrote into `local`: the vertices, each once, or nullopt when it
   /// may have written any (a snapshot, a rebase of edits made since the submit, a first
-  /// update on an empty mesh). A host mirroring `local` copies back those only.
+  /// update on an empty mesh, a failure while applying). A host mirroring `local` copies back
+  /// those only, also when update() threw (nothing, when it refused the host's values).
   std::optional<std::span<const std::uint32_t>> written() const;
   /// Records a stroke the host just ended on `local`, for undo(): the vertices it changed and
   /// their values before it (per vertex: the position, then every channel's values in the
