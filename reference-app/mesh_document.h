@@ -56,7 +56,7 @@ class MeshDocument {
   std::vector<uint32_t> triangles;
   std::vector<MeshChannel> channels;
   std::vector<float> normals;
-  std::vector<float> face_normals;  // per triangle, unnormalised (twice its area)
+  std::vector<float> face_normals;                 // per triangle, unnormalised (twice its area)
   int albedo = -1, metallic = -1, roughness = -1;  // channel indices
   std::string label;                               // file name or "built-in sphere"
 

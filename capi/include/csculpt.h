@@ -524,8 +524,9 @@ CSC_API csc_status csc_session_submit(csc_session* session, const csc_vertex_arr
  *  those and the listed ones only; the edit sent is the one csc_session_submit would send when
  *  every change is listed. A change of a vertex that is not listed is not sent until a later
  *  call lists it, a csc_session_submit sends it, or a csc_session_update that applies a
- *  version finds it (it compares the whole arrays; csc_session_update_changed does not). Fails with CSC_ERROR_INVALID_INPUT naming
- *  an index out of range (nothing is sent or written). */
+ *  version finds it (it compares the whole arrays; csc_session_update_changed does not).
+ *  Fails with CSC_ERROR_INVALID_INPUT naming an index out of range (nothing is sent or
+ *  written). */
 CSC_API csc_status csc_session_submit_changed(csc_session* session, const csc_vertex_arrays* local,
                                               const uint32_t* changed, uint32_t count,
                                               uint32_t strokes, int32_t* sent);

@@ -282,7 +282,7 @@ bool Session::Impl::replay_journal(const std::optional<OwnEdit>& own, Mesh& loca
     ++versions_applied;
     restore_when_due();
   }
-  retouch_all(local);      // the restored edit differs from the base
+  retouch_all(local);  // the restored edit differs from the base
   const bool unmerged = !equals_base_plus(base, nullptr, local);
   // Counted from the restart on: the strokes still unacknowledged are submitted again.
   if (!unmerged) unacknowledged_strokes = 0;
@@ -513,8 +513,8 @@ bool Session::Impl::holds_only_submitted(const Mesh& local,
   // and that was the base plus the latest submit.
   gather(*changed, "update");
   capture_diff_at(base, local, candidates, captured);
-  const bool left_as_submitted = submitted.empty() ? same_change(host_state, Diff{})
-                                                   : host_state_sent;
+  const bool left_as_submitted =
+      submitted.empty() ? same_change(host_state, Diff{}) : host_state_sent;
   if (left_as_submitted && same_change(captured, host_state)) return true;
   check_diff_values(captured, base, frame, "update");
   return false;

@@ -61,8 +61,7 @@ void decoded_attribute(const AttributeDiff& change, const float* base, std::uint
 /// `base` holds `width` floats per vertex of the base mesh. `decoded` (may be null) gets what
 /// a receiver decodes.
 EncodedAttribute encode_attribute(const AttributeDiff& change, const float* base,
-                                  std::uint32_t width, double tolerance,
-                                  AttributeDiff* decoded) {
+                                  std::uint32_t width, double tolerance, AttributeDiff* decoded) {
   EncodedAttribute e;
   const std::size_t n = change.indices.size();
   const double step = step_per_tolerance * tolerance;

@@ -86,7 +86,8 @@ TEST(AppBvh, QueriesAndRaysMatchBruteForceThroughGrownAndTightenedRefits) {
     float nearest = INFINITY;
     for (uint32_t t = 0; t < m.triangles.size() / 3; ++t) {
       const glm::vec3 a = at(m, m.triangles[3 * t]);
-      const glm::vec3 e1 = at(m, m.triangles[3 * t + 1]) - a, e2 = at(m, m.triangles[3 * t + 2]) - a;
+      const glm::vec3 e1 = at(m, m.triangles[3 * t + 1]) - a,
+                      e2 = at(m, m.triangles[3 * t + 2]) - a;
       const glm::vec3 p = glm::cross(direction, e2);
       const float det = glm::dot(e1, p);
       if (std::abs(det) < 1e-12f) continue;

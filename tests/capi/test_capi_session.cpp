@@ -258,8 +258,7 @@ TEST(CapiSession, AnUpdateOfTheChangedVerticesAppliesAndRebasesAsTheWholeUpdateD
   const float a_value = ha.positions[3 * 500 + 1];
   const std::vector<std::uint32_t> bad = {va.vertex_count};
   EXPECT_EQ(csc_session_update_changed(a, &va, bad.data(), 1, nullptr), CSC_ERROR_INVALID_INPUT);
-  EXPECT_NE(std::string(csc_last_error()).find(std::to_string(va.vertex_count)),
-            std::string::npos)
+  EXPECT_NE(std::string(csc_last_error()).find(std::to_string(va.vertex_count)), std::string::npos)
       << csc_last_error();
   EXPECT_EQ(csc_session_update_changed(a, &va, nullptr, 1, nullptr), CSC_ERROR_INVALID_ARGUMENT);
   uint32_t applied_a = 0, applied_b = 0;

@@ -52,8 +52,8 @@ struct EncodeOptions {
 /// Bound: each decoded component is within 0.8 x tolerance (x scale) of the original plus half
 /// a float ulp of the value (negligible within ~30 bounding-box diagonals of the origin).
 /// `decoded` (may be null) receives that decoded diff, bit for bit what decode_diff of the
-/// bytes gives, without decoding them (it must not be `diff` itself). Throws InvalidInput if the diff does not fit the base
-/// or the author is too long.
+/// bytes gives, without decoding them (it must not be `diff` itself). Throws InvalidInput if the
+/// diff does not fit the base or the author is too long.
 std::vector<std::uint8_t> encode_diff(const Diff& diff, const Mesh& base, const DiffHeader& header,
                                       const EncodeOptions& options = {}, Diff* decoded = nullptr);
 

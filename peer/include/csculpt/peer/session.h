@@ -235,8 +235,8 @@ class Session {
   /// the edit over those and `changed` only; the edit sent is the same as submit(local, strokes)
   /// would send when every change is listed. A change of a vertex the host does not list is not
   /// sent until a later call lists it, a whole-mesh submit sends it, or an update that applies
-  /// a version finds it (update(local) compares the whole mesh). Throws InvalidInput naming an index
-  /// out of range (nothing is sent or changed).
+  /// a version finds it (update(local) compares the whole mesh). Throws InvalidInput naming an
+  /// index out of range (nothing is sent or changed).
   bool submit(Mesh& local, std::uint32_t strokes, std::span<const std::uint32_t> changed);
   /// The vertices where the host's mesh may differ from base() as far as the session knows,
   /// increasing: what the last submit sent, what a rebase left, what undo() and redo() wrote.
