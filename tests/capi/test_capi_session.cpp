@@ -198,19 +198,27 @@ bool wait_for(const std::function<bool()>& done) {
   return done();
 }
 
-/// Peer 1 creates a session on `mesh`, peer 2 joins it.
-void start_pair(const csc_mesh* mesh, csc_session*& a, csc_session*& b) {
-  const csc_session_options oa = fast(1), ob = fast(2);
-  ASSERT_EQ(csc_session_create(&a, mesh, &oa), CSC_OK) << csc_last_error();
-  ASSERT_EQ(csc_session_join(&b, csc_session_invite(a), &ob), CSC_OK) << csc_last_error();
-}
-
-TEST(CapiSession, ASubmitOfTheChangedVerticesReachesThePeerAndABadIndexIsRefused) {
+/// Two hosts of one session on a grid: peer 1 (`a`) created it, peer 2 (`b`) joined; each has
+/// its arrays (`ha`, `hb`, viewed by `va`, `vb`).
+class CapiSessionPair : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const csc_session_options oa = fast(1), ob = fast(2);
+    ASSERT_EQ(csc_session_create(&a, mesh, &oa), CSC_OK) << csc_last_error();
+    ASSERT_EQ(csc_session_join(&b, csc_session_invite(a), &ob), CSC_OK) << csc_last_error();
+  }
+  void TearDown() override {
+    csc_session_destroy(b);
+    csc_session_destroy(a);
+    csc_mesh_destroy(mesh);
+  }
   csc_mesh* mesh = grid(24);
   csc_session *a = nullptr, *b = nullptr;
-  ASSERT_NO_FATAL_FAILURE(start_pair(mesh, a, b));
-  HostArrays ha(mesh), hb(mesh);
+  HostArrays ha{mesh}, hb{mesh};
   csc_vertex_arrays va = ha.arrays(), vb = hb.arrays();
+};
+
+TEST_F(CapiSessionPair, ASubmitOfTheChangedVerticesReachesThePeerAndABadIndexIsRefused) {
   // b lifts three vertices and paints one; listed backwards, with a repeat
   const std::vector<std::uint32_t> changed = {300, 41, 7, 41};
   for (const std::uint32_t v : {7u, 41u, 300u}) hb.positions[3 * v + 2] += 0.2f;
@@ -239,17 +247,9 @@ TEST(CapiSession, ASubmitOfTheChangedVerticesReachesThePeerAndABadIndexIsRefused
   }));
   EXPECT_NEAR(ha.positions[3 * 41 + 2], edited.positions[3 * 41 + 2], 1e-4f);
   EXPECT_EQ(ha.channels[0][3 * 300], 1.f);
-  csc_session_destroy(b);
-  csc_session_destroy(a);
-  csc_mesh_destroy(mesh);
 }
 
-TEST(CapiSession, AnUpdateOfTheChangedVerticesAppliesAndRebasesAsTheWholeUpdateDoes) {
-  csc_mesh* mesh = grid(24);
-  csc_session *a = nullptr, *b = nullptr;
-  ASSERT_NO_FATAL_FAILURE(start_pair(mesh, a, b));
-  HostArrays ha(mesh), hb(mesh);
-  csc_vertex_arrays va = ha.arrays(), vb = hb.arrays();
+TEST_F(CapiSessionPair, AnUpdateOfTheChangedVerticesAppliesAndRebasesAsTheWholeUpdateDoes) {
   const std::vector<std::uint32_t> sent_b = {7, 41};
   for (const std::uint32_t v : sent_b) hb.positions[3 * v + 2] += 0.2f;
   ASSERT_EQ(csc_session_submit_changed(b, &vb, sent_b.data(), 2, 1, nullptr), CSC_OK);
@@ -289,9 +289,6 @@ TEST(CapiSession, AnUpdateOfTheChangedVerticesAppliesAndRebasesAsTheWholeUpdateD
     return csc_session_version(a) >= 2 && csc_session_version(b) >= 2 && ha == hb;
   }));
   csc_mesh_destroy(base_b);
-  csc_session_destroy(b);
-  csc_session_destroy(a);
-  csc_mesh_destroy(mesh);
 }
 
 TEST(CapiSession, PresenceAndPeersCrossTheAbi) {
