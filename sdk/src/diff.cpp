@@ -106,6 +106,18 @@ Diff capture_diff(const Mesh& base, const Mesh& edited) {
   return d;
 }
 
+void clear_to_layout(Diff& d, const Mesh& base) {
+  d.vertex_count = static_cast<std::uint32_t>(base.vertex_count());
+  d.positions.indices.clear();
+  d.positions.values.clear();
+  d.channels.resize(base.channels.size());
+  for (std::size_t c = 0; c < base.channels.size(); ++c) {
+    d.channels[c].desc = base.channels[c].desc;
+    d.channels[c].change.indices.clear();
+    d.channels[c].change.values.clear();
+  }
+}
+
 void capture_diff_at(const Mesh& base, const Mesh& edited, std::span<const std::uint32_t> vertices,
                      Diff& out) {
   if (edited.vertex_count() != base.vertex_count() ||
@@ -116,14 +128,12 @@ void capture_diff_at(const Mesh& base, const Mesh& edited, std::span<const std::
         edited.channels[c].values.size() != base.channels[c].values.size())
       throw InvalidInput("capture_diff_at: channel '" + base.channels[c].desc.name + "' differs");
   check_listed(vertices, base.vertex_count());
-  out.vertex_count = static_cast<std::uint32_t>(base.vertex_count());
+  clear_to_layout(out, base);
   capture_listed(reinterpret_cast<const float*>(base.positions.data()),
                  reinterpret_cast<const float*>(edited.positions.data()), 3, vertices,
                  out.positions);
-  out.channels.resize(base.channels.size());
   for (std::size_t c = 0; c < base.channels.size(); ++c) {
     const Channel& b = base.channels[c];
-    out.channels[c].desc = b.desc;
     capture_listed(b.values.data(), edited.channels[c].values.data(), b.desc.width, vertices,
                    out.channels[c].change);
   }

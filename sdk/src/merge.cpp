@@ -817,14 +817,11 @@ const std::vector<std::uint32_t> kNoChanges;
 /// `d` as a merge returns it: one channel entry per channel of `base`, in its order.
 Diff in_base_order(const Diff& d, const Mesh& base) {
   Diff out;
-  out.vertex_count = d.vertex_count;
+  clear_to_layout(out, base);  // d's vertex count: validated
   out.positions = d.positions;
-  for (const Channel& c : base.channels) {
-    ChannelDiff channel{c.desc, {}};
+  for (ChannelDiff& channel : out.channels)
     for (const ChannelDiff& given : d.channels)
-      if (given.desc.name == c.desc.name) channel.change = given.change;
-    out.channels.push_back(std::move(channel));
-  }
+      if (given.desc.name == channel.desc.name) channel.change = given.change;
   return out;
 }
 

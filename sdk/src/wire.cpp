@@ -41,15 +41,11 @@ struct EncodedAttribute {
   double step = 0;
 };
 
-/// What decode_attribute makes of `e`, without reading it back: the kept vertices and the
-/// values base + q x step, computed as the decoder computes them (bit for bit).
-void decoded_attribute(const AttributeDiff& change, const float* base, std::uint32_t width,
+/// What decode_attribute makes of quantised values: the kept vertices and base + q x step,
+/// computed as the decoder computes them (bit for bit), without reading the bytes back.
+void decoded_attribute(const float* base, std::uint32_t width,
                        const std::vector<std::uint32_t>& kept, const std::vector<std::int64_t>& q,
                        double step, AttributeDiff& out) {
-  if (step == 0) {  // sent as float bits
-    out = change;
-    return;
-  }
   out.indices = kept;
   out.values.resize(q.size());
   for (std::size_t i = 0; i < kept.size(); ++i)
@@ -92,7 +88,7 @@ EncodedAttribute encode_attribute(const AttributeDiff& change, const float* base
     }
   }
   if (!quantise) {
-    if (decoded) decoded_attribute(change, base, width, kept, q, 0, *decoded);
+    if (decoded) *decoded = change;  // sent as float bits
     e.count = static_cast<std::uint32_t>(n);
     put_index_gaps(change.indices, e.index_gaps);
     e.values.resize(change.values.size() * sizeof(float));
@@ -102,7 +98,7 @@ EncodedAttribute encode_attribute(const AttributeDiff& change, const float* base
   }
   e.count = static_cast<std::uint32_t>(kept.size());
   e.step = step;
-  if (decoded) decoded_attribute(change, base, width, kept, q, step, *decoded);
+  if (decoded) decoded_attribute(base, width, kept, q, step, *decoded);
   put_index_gaps(kept, e.index_gaps);
   // Planar, plain and predicted; keep the smaller.
   std::vector<std::uint8_t> plain, predicted;
@@ -293,15 +289,7 @@ std::vector<std::uint8_t> encode_diff(const Diff& diff, const Mesh& base, const 
   if (scale == 0 && options.position_tolerance > 0) scale = bbox_diagonal(base.positions);
   if (scale == 0) scale = 1;  // a point-like mesh: the tolerance is absolute
 
-  if (decoded) {  // as decode_diff makes it: every channel of the base, in the base's order
-    decoded->vertex_count = diff.vertex_count;
-    decoded->channels.resize(base.channels.size());
-    for (std::size_t c = 0; c < base.channels.size(); ++c) {
-      decoded->channels[c].desc = base.channels[c].desc;
-      decoded->channels[c].change.indices.clear();
-      decoded->channels[c].change.values.clear();
-    }
-  }
+  if (decoded) clear_to_layout(*decoded, base);  // as decode_diff lays it out
   flatbuffers::FlatBufferBuilder b(1024 + diff.positions.size() * 8);
   static_assert(sizeof(Vec3f) == 3 * sizeof(float));
   const auto positions = build_attribute(
@@ -345,11 +333,9 @@ Diff decode_diff(std::span<const std::uint8_t> bytes, const Mesh& base, DiffHead
     throw InvalidInput("diff message is for " + std::to_string(h.vertex_count) +
                        " vertices but the base mesh has " + std::to_string(base.vertex_count()));
   Diff d;
-  d.vertex_count = h.vertex_count;
+  clear_to_layout(d, base);  // h.vertex_count, checked above
   decode_attribute(m.positions(), reinterpret_cast<const float*>(base.positions.data()), 3,
                    d.vertex_count, "diff message positions", d.positions);
-  d.channels.resize(base.channels.size());
-  for (std::size_t c = 0; c < base.channels.size(); ++c) d.channels[c].desc = base.channels[c].desc;
   if (const auto* channels = m.channels()) {
     if (channels->size() > limits.max_channels)
       throw InvalidInput("diff message has " + std::to_string(channels->size()) +

@@ -37,6 +37,11 @@ struct Diff {
   friend bool operator==(const Diff&, const Diff&) = default;
 };
 
+/// Makes `d` the diff of no change on `base`: its vertex count, no positions, and one empty entry
+/// per channel of `base` in its order (the layout captures, decodes and merges give), reusing
+/// `d`'s buffers.
+void clear_to_layout(Diff& d, const Mesh& base);
+
 /// Every vertex whose position or channel value differs (bitwise) from the base.
 /// Throws InvalidInput if the connectivity or channel layout differs.
 Diff capture_diff(const Mesh& base, const Mesh& edited);
