@@ -262,6 +262,7 @@ void PeerNode::on_heartbeat(const fb::Envelope& env, const fb::Heartbeat& hb,
   reported_[sender] = {hb.version(), hb.chain()};
   if (hb.merger() != 0) on_elected(env, hb.merger());
   if (!joined_) return;
+  if (election_.merger() == sender) resend_own_submit_if_caught_up(hb.version(), hb.chain());
   // Behind someone: fetch what we missed (at most once per heartbeat interval).
   if (hb.version() > replication_.version() && now >= next_fetch_) {
     next_fetch_ = now + options_.membership.heartbeat;
@@ -645,8 +646,19 @@ void PeerNode::send_own_submit() {
       event(EventKind::error, self_, e.what());
     }
   } else if (election_.merger()) {
+    const auto merger = reported_.find(*election_.merger());
+    own_submit_merger_version_ = merger == reported_.end() ? kUnknownVersion : merger->second.first;
     send_to_peer(*election_.merger(), bytes);
   }
+}
+
+void PeerNode::resend_own_submit_if_caught_up(std::uint64_t version, std::uint64_t chain) {
+  if (own_submit_.kind != Command::Kind::submit || own_submit_.bytes.empty()) return;
+  if (version != own_submit_.base_version || version != replication_.version() ||
+      chain != replication_.chain() || own_submit_merger_version_ == version)
+    return;  // not caught up with our base, or it held our base when the submit went
+  host_.update_stats([](SessionStats& s) { ++s.submits_resent; });
+  send_own_submit();
 }
 
 /// Our cursor to every member: a change at most every 50 ms, the same again every second.

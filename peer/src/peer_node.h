@@ -140,6 +140,9 @@ class PeerNode {
   void send_heartbeat_to(const std::string& endpoint);
   Bytes hello(bool wants_snapshot) const;
   void send_own_submit();
+  /// The merger's heartbeat says it holds `version` at `chain`: our submit goes again if it
+  /// reached the merger while it was behind.
+  void resend_own_submit_if_caught_up(std::uint64_t version, std::uint64_t chain);
   void send_presence(Clock::time_point now);
   void merge_pending();
   void build_merge_state();
@@ -167,6 +170,12 @@ class PeerNode {
   std::map<PeerId, std::pair<std::uint64_t, std::uint64_t>> reported_;
   /// Our last submit, kept until a merged version covers it: a new merger gets it again.
   Command own_submit_;
+  /// The version the merger last said it holds when our submit went to it (kUnknownVersion:
+  /// it had not said). A merger behind our base ignores the submit as stale; it is sent again
+  /// once the merger says it holds our base (it caught up with us: after a heal, a new merger
+  /// that was behind), or the artist's work would wait for an edit that may never come.
+  std::uint64_t own_submit_merger_version_ = kUnknownVersion;
+  static constexpr std::uint64_t kUnknownVersion = ~std::uint64_t{0};
   std::optional<MergerRole> merger_;  // once the mesh (and so its hierarchy) is known
   std::shared_ptr<const Hierarchy> hierarchy_;
   MergeFrame frame_;           // the session's (first mesh's), for the merge and wire tolerances

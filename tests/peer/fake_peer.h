@@ -4,6 +4,7 @@
 // never would.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 
@@ -21,14 +22,25 @@ class FakePeer {
         id_(id),
         transport_(invite_, id, "tcp://127.0.0.1:*", std::size_t{64} << 20) {}
 
-  EnvelopeHeader header() const { return {invite_.session, id_, 0}; }
+  EnvelopeHeader header() const { return {invite_.session, id_, epoch_}; }
   void send(const Bytes& bytes) { transport_.send(invite_.endpoint, bytes); }
   void hello() { send(hello_message(header(), transport_.endpoint(), "fake", false)); }
-  void heartbeat() { send(heartbeat_message(header(), 0, 0, 0)); }
+  /// What its heartbeats say: by default nothing (version 0, chain 0, no merger).
+  void says(std::uint64_t version, std::uint64_t chain, PeerId merger) {
+    version_ = version, chain_ = chain, merger_ = merger;
+  }
+  void heartbeat() { send(heartbeat_message(header(), version_, chain_, merger_)); }
+  /// Claims the merger's role in `epoch` (the member follows a claim of a later epoch).
+  void claim_merger(std::uint64_t epoch) {
+    epoch_ = epoch;
+    merger_ = id_;
+    send(elected_message(header(), id_));
+  }
 
-  /// Serves the member's connection to us (ZAP) and throws away what it sends, for `span`;
-  /// with `beat`, heartbeats that often meanwhile.
-  void pump(Millis span, std::optional<Millis> beat = std::nullopt) {
+  /// Serves the member's connection to us (ZAP) for `span`, handing what it sends to `seen`
+  /// (if given); with `beat`, heartbeats that often meanwhile.
+  void pump(Millis span, std::optional<Millis> beat = std::nullopt,
+            const std::function<void(const fb::Envelope&)>& seen = {}) {
     const auto end = Clock::now() + span;
     auto next_beat = Clock::now();
     while (Clock::now() < end) {
@@ -37,14 +49,16 @@ class FakePeer {
         next_beat += *beat;
       }
       transport_.wait(Millis{5});
-      for (Inbound in; transport_.receive(in);) {
-      }
+      for (Inbound in; transport_.receive(in);)
+        if (seen) seen(*fb::GetEnvelope(in.payload.data()));
     }
   }
 
  private:
   Invite invite_;
   PeerId id_;
+  std::uint64_t epoch_ = 0, version_ = 0, chain_ = 0;
+  PeerId merger_ = 0;
   Transport transport_;
 };
 

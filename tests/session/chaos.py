@@ -245,26 +245,52 @@ def check(cluster):
             "branch_versions_dropped": sum(s["branch_versions_dropped"] for s in summaries)}
 
 
-def diagnose(cluster):
-    """What each live peer is doing: its exit code and stderr, or, when it has printed nothing
-    for 5 s, its threads' stacks (gdb, where installed)."""
+def diagnose(cluster, reason):
+    """The failure first, then what each live peer is doing: one line of its latest state, its
+    exit code and stderr, and, when it has printed nothing for 5 s, the stacks (gdb, where
+    installed) of its threads that are not idle. CI keeps only the head and tail of a long
+    output: the reason and the states come before the stacks."""
+    print(f"FAILED: {str(reason)[:300]}", flush=True)
+    keys = ("version", "merger", "epoch", "members", "unacknowledged", "editing", "strokes")
+    for p in cluster.live.values():
+        s = p.state() or {}
+        same = s.get("digest") == s.get("base_digest")
+        print(f"peer {p.peer_id}: " + " ".join(f"{k} {s.get(k)}" for k in keys) +
+              f" digest {s.get('digest')} local==base {same} exit {p.proc.poll()} "
+              f"silent {time.time() - s.get('_read_at', 0):.1f} s", flush=True)
     for p in cluster.live.values():
         code = p.proc.poll()
         state = p.state() or {}
         silent = time.time() - state.get("_read_at", 0)
-        print(f"peer {p.peer_id}: exit {code}, silent {silent:.1f} s, stderr {p.stderr[-500:]!r}",
-              flush=True)
+        if p.stderr:
+            print(f"peer {p.peer_id} stderr: {p.stderr[-500:]!r}", flush=True)
         reasons = {}
         for line in p.events("dropped"):
             reasons[line["reason"]] = reasons.get(line["reason"], 0) + 1
         if reasons:
-            print(f"  dropped: {sorted(reasons.items(), key=lambda r: -r[1])[:3]}", flush=True)
+            print(f"peer {p.peer_id} dropped: {sorted(reasons.items(), key=lambda r: -r[1])[:3]}",
+                  flush=True)
         if code is None and silent > 5 and shutil.which("gdb"):
             stacks = subprocess.run(["gdb", "-p", str(p.proc.pid), "-batch", "-ex",
-                                     "thread apply all bt 15"], capture_output=True, text=True,
+                                     "thread apply all bt 12"], capture_output=True, text=True,
                                     timeout=120).stdout
-            print("\n".join(line for line in stacks.splitlines() if line.startswith(("#", "Thread"))),
-                  flush=True)
+            print(f"peer {p.peer_id} busy threads:\n" + busy_threads(stacks), flush=True)
+
+
+def busy_threads(gdb_output):
+    """The frames of the threads gdb listed, without those waiting for work (the merge's
+    worker pool, ZeroMQ's I/O threads, the network thread's poll)."""
+    idle = ("WorkerPool::work", "epoll_wait", "Transport::wait")
+    threads, current = [], []
+    for line in gdb_output.splitlines():
+        if line.startswith("Thread"):
+            threads.append(current)
+            current = [line]
+        elif line.startswith("#") and current:
+            current.append(line[:200])
+    threads.append(current)
+    kept = [t for t in threads if t and not any(word in f for f in t for word in idle)]
+    return "\n".join(line for t in kept for line in t)
 
 
 def write_logs(cluster, schedule_lines, directory):
@@ -328,9 +354,9 @@ def run(minutes, seed, faces, logs=None):
                         "agreed_version": settled["version"]})
         print(json.dumps({"chaos": figures}), flush=True)
         return figures
-    except AssertionError:
+    except AssertionError as e:
         if cluster:
-            diagnose(cluster)
+            diagnose(cluster, e)
         raise
     finally:
         if cluster:

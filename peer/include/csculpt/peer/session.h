@@ -96,6 +96,9 @@ struct SessionStats {
   // this peer as an author
   std::uint64_t submits = 0;
   std::uint64_t submit_bytes = 0;
+  /// Submits sent again to a merger that was behind them when they came (it ignored them as
+  /// stale) once it caught up: counted in `submits` too. Not in csc_session_stats.
+  std::uint64_t submits_resent = 0;
   std::uint64_t strokes_submitted = 0;     ///< strokes the host reported
   std::uint64_t strokes_acknowledged = 0;  ///< of those, in a version update() applied
   std::uint64_t versions_applied = 0;      ///< by update()

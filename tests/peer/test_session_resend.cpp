@@ -1,0 +1,115 @@
+// A submit that reached a merger behind the author's version (after a heal, the new merger can
+// be the peer that was behind) is ignored there as stale. The author sends it again once the
+// merger's heartbeat says it caught up, exactly once: an artist who stopped editing would
+// otherwise wait for ever for a version with their last strokes. The merger here is a hand-
+// driven member (FakePeer) so that "behind" and "caught up" happen when the test says.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <vector>
+
+#include "csculpt/diff.h"
+#include "csculpt/peer/session.h"
+#include "csculpt/testkit/generate.h"
+#include "fake_peer.h"
+#include "sessions.h"
+
+namespace {
+
+using namespace csculpt;
+using namespace csculpt::peer;
+using namespace csculpt::peer::testing;
+using namespace std::chrono_literals;
+
+/// What the fake merger saw of the real peer: its submits (their diff bytes) and the chain its
+/// heartbeats gave for each version.
+struct Seen {
+  std::vector<std::vector<std::uint8_t>> submits;
+  std::uint64_t version = 0, chain = 0;
+  void operator()(const fb::Envelope& env) {
+    if (const auto* s = env.body_as_Submit()) {
+      submits.emplace_back(s->diff()->begin(), s->diff()->end());
+    } else if (const auto* hb = env.body_as_Heartbeat()) {
+      version = hb->version();
+      chain = hb->chain();
+    }
+  }
+};
+
+void nudge(Mesh& local, std::uint32_t vertex, float by) {
+  local.positions[vertex].y += by;
+}
+
+TEST(SessionResend, ASubmitIgnoredByAMergerThatWasBehindGoesAgainOnceItCatchesUp) {
+  const Mesh sphere = make_sphere(400);
+  auto author = Session::create(sphere, fast_options(5, "author"));
+  Mesh local = author->base();
+  // Version 1, merged by the author while it is the only member.
+  nudge(local, 3, 0.05f);
+  author->submit(local, 1);
+  ASSERT_TRUE(wait_until([&] {
+    author->update(local);
+    return author->version() == 1;
+  }));
+
+  // A member with a lower id claims the merger's role, saying it holds only version 0.
+  FakePeer merger(author->invite(), 1);
+  Seen seen;
+  merger.hello();
+  merger.pump(100ms, 20ms, std::ref(seen));
+  merger.claim_merger(100);
+  merger.says(0, 0, 1);
+  ASSERT_TRUE(wait_until([&] {
+    merger.pump(20ms, 20ms, std::ref(seen));
+    return author->stats().merger == 1 && seen.version == 1;
+  }));
+
+  // The author's next edit goes to the merger, which is behind it: a real merger ignores it.
+  nudge(local, 40, 0.05f);
+  ASSERT_TRUE(author->submit(local, 1));
+  ASSERT_TRUE(wait_until([&] {
+    merger.pump(20ms, 20ms, std::ref(seen));
+    return seen.submits.size() == 1;
+  }));
+  merger.pump(300ms, 20ms, std::ref(seen));  // still behind: nothing is sent again
+  EXPECT_EQ(seen.submits.size(), 1u);
+
+  // Caught up (version 1, the author's chain): the same submit comes again, once.
+  merger.says(1, seen.chain, 1);
+  ASSERT_TRUE(wait_until([&] {
+    merger.pump(20ms, 20ms, std::ref(seen));
+    return seen.submits.size() == 2;
+  }));
+  EXPECT_EQ(seen.submits[1], seen.submits[0]);
+  merger.pump(300ms, 20ms, std::ref(seen));
+  EXPECT_EQ(seen.submits.size(), 2u);
+  EXPECT_EQ(author->stats().submits_resent, 1u);
+}
+
+TEST(SessionResend, ASubmitTheMergerCouldTakeIsNotSentAgain) {
+  const Mesh sphere = make_sphere(400);
+  auto author = Session::create(sphere, fast_options(5, "author"));
+  Mesh local = author->base();
+  FakePeer merger(author->invite(), 1);
+  Seen seen;
+  merger.hello();
+  merger.pump(100ms, 20ms, std::ref(seen));
+  merger.claim_merger(100);
+  ASSERT_TRUE(wait_until([&] {
+    merger.says(0, seen.chain, 1);  // holds the author's version 0 and chain
+    merger.pump(20ms, 20ms, std::ref(seen));
+    return author->stats().merger == 1 && seen.chain != 0;
+  }));
+  merger.pump(100ms, 20ms, std::ref(seen));
+  nudge(local, 40, 0.05f);
+  ASSERT_TRUE(author->submit(local, 1));
+  ASSERT_TRUE(wait_until([&] {
+    merger.pump(20ms, 20ms, std::ref(seen));
+    return seen.submits.size() == 1;
+  }));
+  merger.pump(400ms, 20ms, std::ref(seen));
+  EXPECT_EQ(seen.submits.size(), 1u);
+  EXPECT_EQ(author->stats().submits_resent, 0u);
+}
+
+}  // namespace
