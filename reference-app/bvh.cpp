@@ -49,6 +49,7 @@ void TriangleBvh::build(const std::vector<float>& positions,
   depth_.clear();
   if (count > 0) build_node(positions, triangles, centroids, 0, count, kNone, 0);
   assign_vertices(triangles, positions.size() / 3);
+  index_vertex_leaves(triangles, positions.size() / 3);
   for (Marks* m : {&growing_marks_, &loose_marks_, &tighten_marks_}) m->resize(nodes_.size());
   loose_.clear();
 }
@@ -108,6 +109,30 @@ void TriangleBvh::assign_vertices(const std::vector<uint32_t>& triangles, size_t
   owned_begin_[nodes_.size()] = static_cast<uint32_t>(owned_.size());
 }
 
+void TriangleBvh::index_vertex_leaves(const std::vector<uint32_t>& triangles, size_t vertex_count) {
+  // Two passes over the leaves in node order (counts, then entries); a vertex meets its
+  // leaves in increasing order, so comparing with the last one it got removes repeats.
+  std::vector<uint32_t> last(vertex_count, kNone);
+  vertex_leaves_begin_.assign(vertex_count + 1, 0);
+  auto each_new = [&](auto&& take) {
+    for (uint32_t n = 0; n < nodes_.size(); ++n)
+      for (uint32_t i = nodes_[n].first;
+           nodes_[n].count > 0 && i < nodes_[n].first + nodes_[n].count; ++i)
+        for (int c = 0; c < 3; ++c) {
+          const uint32_t v = triangles[3 * size_t{order_[i]} + c];
+          if (last[v] == n) continue;
+          last[v] = n;
+          take(v, n);
+        }
+  };
+  each_new([&](uint32_t v, uint32_t) { ++vertex_leaves_begin_[v + 1]; });
+  for (size_t v = 0; v < vertex_count; ++v) vertex_leaves_begin_[v + 1] += vertex_leaves_begin_[v];
+  vertex_leaves_.resize(vertex_leaves_begin_[vertex_count]);
+  std::vector<uint32_t> next(vertex_leaves_begin_.begin(), vertex_leaves_begin_.end() - 1);
+  std::fill(last.begin(), last.end(), kNone);
+  each_new([&](uint32_t v, uint32_t n) { vertex_leaves_[next[v]++] = n; });
+}
+
 void TriangleBvh::fit_leaf(Node& node, const std::vector<float>& positions,
                            const std::vector<uint32_t>& triangles) const {
   node.lo = glm::vec3(std::numeric_limits<float>::max());
@@ -120,19 +145,16 @@ void TriangleBvh::fit_leaf(Node& node, const std::vector<float>& positions,
     }
 }
 
-void TriangleBvh::refit(const std::vector<float>& positions, const std::vector<uint32_t>& triangles,
-                        std::span<const uint32_t> changed_triangles) {
-  // Grown, not refitted: a changed triangle's corners (which the caller just read for its
-  // normal) are added to its leaf; then each grown leaf's ancestors grow as far as needed.
-  for (uint32_t t : changed_triangles) {
-    const uint32_t leaf = leaf_of_triangle_[t];
-    Node& node = nodes_[leaf];
-    for (int c = 0; c < 3; ++c) {
-      const glm::vec3 p = vertex(positions, triangles[3 * size_t{t} + c]);
+void TriangleBvh::refit(const std::vector<float>& positions, std::span<const uint32_t> moved) {
+  for (uint32_t v : moved) {
+    const glm::vec3 p = vertex(positions, v);
+    for (uint32_t k = vertex_leaves_begin_[v]; k < vertex_leaves_begin_[v + 1]; ++k) {
+      const uint32_t leaf = vertex_leaves_[k];
+      Node& node = nodes_[leaf];
       node.lo = glm::min(node.lo, p);
       node.hi = glm::max(node.hi, p);
+      if (growing_marks_.mark(leaf)) growing_.push_back(leaf);
     }
-    if (growing_marks_.mark(leaf)) growing_.push_back(leaf);
   }
   for (uint32_t leaf : growing_) {
     if (loose_marks_.mark(leaf)) loose_.push_back(leaf);

@@ -1,6 +1,6 @@
 // A bounding-volume hierarchy over the mesh's triangles for the brush's hit test and its
-// region query. Built once per mesh layout; after a dab only the boxes above the changed
-// triangles are refitted (the topology never changes while sculpting, so the tree stays valid,
+// region query. Built once per mesh layout; after a dab only the boxes above the moved
+// vertices are refitted (the topology never changes while sculpting, so the tree stays valid,
 // only looser where the surface moved far). Each vertex belongs to one leaf holding a triangle
 // of it, so the region query visits each vertex once, not once per triangle around it.
 #pragma once
@@ -23,11 +23,10 @@ struct RayHit {
 class TriangleBvh {
  public:
   void build(const std::vector<float>& positions, const std::vector<uint32_t>& triangles);
-  /** Grows the leaves of `changed_triangles` to hold them where they moved, and their
-   *  ancestors as far as they must (cheap enough for every dab: most stop at the leaf). A box
-   *  may then be larger than it needs be, never too small, until tighten(). */
-  void refit(const std::vector<float>& positions, const std::vector<uint32_t>& triangles,
-             std::span<const uint32_t> changed_triangles);
+  /** Grows the leaves holding a triangle of each `moved` vertex to hold it where it is now,
+   *  and their ancestors as far as they must (cheap enough for every dab: most stop at the
+   *  leaf). A box may then be larger than it needs be, never too small, until tighten(). */
+  void refit(const std::vector<float>& positions, std::span<const uint32_t> moved);
   /** Refits exactly every box refit() grew since the last call, and their ancestors (at the
    *  end of a stroke, after an undo or a merged version). */
   void tighten(const std::vector<float>& positions, const std::vector<uint32_t>& triangles);
@@ -52,6 +51,8 @@ class TriangleBvh {
                       uint32_t parent, uint8_t depth);
   /** Gives each vertex to the first leaf (in node order) holding a triangle of it. */
   void assign_vertices(const std::vector<uint32_t>& triangles, size_t vertex_count);
+  /** Lists, for each vertex, the leaves holding a triangle of it (what refit grows). */
+  void index_vertex_leaves(const std::vector<uint32_t>& triangles, size_t vertex_count);
   void fit_leaf(Node& node, const std::vector<float>& positions,
                 const std::vector<uint32_t>& triangles) const;
 
@@ -60,6 +61,11 @@ class TriangleBvh {
   std::vector<uint8_t> depth_;  // of each node: refits go deepest first
   // The vertices node n owns: owned_[owned_begin_[n] .. owned_begin_[n + 1]) (leaves only).
   std::vector<uint32_t> owned_, owned_begin_;
+  // The leaves holding a triangle of vertex v: vertex_leaves_[vertex_leaves_begin_[v] ..
+  // vertex_leaves_begin_[v + 1]), one to three on a typical mesh. A dab moves thousands of
+  // vertices and touches twice as many triangles: growing boxes by vertex reads each moved
+  // position once, where growing by triangle read every corner of every triangle around.
+  std::vector<uint32_t> vertex_leaves_, vertex_leaves_begin_;
   // Scratch reused between refits: the leaves one refit grows, the leaves grown since the
   // last tighten (they and their ancestors may be loose), and tighten's nodes by depth.
   Marks growing_marks_, loose_marks_, tighten_marks_;

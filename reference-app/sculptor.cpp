@@ -258,7 +258,7 @@ void Sculptor::refresh(std::span<const uint32_t> vertices, bool positions_change
   normal_marks_.clear(normal_vertices_);
   document_.recompute_face_normals(changed_triangles_);
   document_.recompute_normals(normal_vertices_);
-  bvh_.refit(document_.positions, document_.triangles, changed_triangles_);
+  bvh_.refit(document_.positions, vertices);
   for (uint32_t v : normal_vertices_) mark_dirty(v);
 }
 

@@ -337,6 +337,13 @@ bool Session::Impl::send(const Diff& d, Mesh& local, std::uint32_t strokes) {
     // already sent, so they are acknowledged as they are (not left unacknowledged for ever).
     strokes_submitted += strokes;
     strokes_acknowledged += strokes;
+    // The host's mesh is the agreed base and nothing of ours is in flight: strokes sent before
+    // are in the base (a snapshot carried them) or the host took them back. None waits for a
+    // version any more, so none is left counted unacknowledged for ever.
+    if (empty && submitted.empty()) {
+      strokes_acknowledged += unacknowledged_strokes;
+      unacknowledged_strokes = 0;
+    }
     return false;
   }
   unacknowledged_strokes += strokes;

@@ -39,22 +39,17 @@ std::vector<uint32_t> brute_force(const TriangleMesh& m, glm::vec3 c, float r) {
   return out;
 }
 
-/// Moves the vertices within `r` of `c` outward by up to `depth` (a draw dab), returning the
-/// triangles around them.
+/// Moves the vertices within `r` of `c` outward by up to `depth` (a draw dab), returning them.
 std::vector<uint32_t> dab(TriangleMesh& m, glm::vec3 c, float r, float depth) {
-  std::vector<bool> moved(m.positions.size() / 3, false);
-  for (uint32_t v = 0; v < moved.size(); ++v) {
+  std::vector<uint32_t> moved;
+  for (uint32_t v = 0; v < m.positions.size() / 3; ++v) {
     const float d = glm::length(at(m, v) - c);
     if (d > r) continue;
     const glm::vec3 p = at(m, v) * (1.f + depth * (1.f - d / r));
     for (int k = 0; k < 3; ++k) m.positions[3 * size_t{v} + k] = p[k];
-    moved[v] = true;
+    moved.push_back(v);
   }
-  std::vector<uint32_t> triangles;
-  for (uint32_t t = 0; t < m.triangles.size() / 3; ++t)
-    if (moved[m.triangles[3 * t]] || moved[m.triangles[3 * t + 1]] || moved[m.triangles[3 * t + 2]])
-      triangles.push_back(t);
-  return triangles;
+  return moved;
 }
 
 TEST(AppBvh, QueriesAndRaysMatchBruteForceThroughGrownAndTightenedRefits) {
@@ -68,8 +63,8 @@ TEST(AppBvh, QueriesAndRaysMatchBruteForceThroughGrownAndTightenedRefits) {
     // A stroke of dabs pushing out (and, every other stroke, in), tightened at its end.
     const glm::vec3 c = random_point();
     const float depth = step % 2 ? -0.15f : 0.3f;
-    const std::vector<uint32_t> changed = dab(m, c, 0.3f, depth);
-    bvh.refit(m.positions, m.triangles, changed);
+    const std::vector<uint32_t> moved = dab(m, c, 0.3f, depth);
+    bvh.refit(m.positions, moved);
     if (step % 3 == 2) bvh.tighten(m.positions, m.triangles);
     for (int q = 0; q < 5; ++q) {
       const glm::vec3 qc = q == 0 ? c * 1.2f : random_point() * (0.8f + 0.4f * (u(rng) + 1.f));

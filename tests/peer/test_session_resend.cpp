@@ -37,7 +37,7 @@ struct Seen {
 };
 
 void nudge(Mesh& local, std::uint32_t vertex, float by) {
-  local.positions[vertex].y += by;
+  local.positions.at(vertex).y += by;
 }
 
 TEST(SessionResend, ASubmitIgnoredByAMergerThatWasBehindGoesAgainOnceItCatchesUp) {
@@ -110,6 +110,35 @@ TEST(SessionResend, ASubmitTheMergerCouldTakeIsNotSentAgain) {
   merger.pump(400ms, 20ms, std::ref(seen));
   EXPECT_EQ(seen.submits.size(), 1u);
   EXPECT_EQ(author->stats().submits_resent, 0u);
+}
+
+// A submit no version took (stale at the merger), whose edit the host then took back: the
+// resend after the next version finds nothing to send, and the strokes are settled, not left
+// unacknowledged for ever (a host waiting for them would wait for ever).
+TEST(SessionResend, StrokesWithNothingLeftToSendAreNotLeftUnacknowledged) {
+  const Mesh sphere = make_sphere(400);
+  auto a = Session::create(sphere, fast_options(1, "a"));
+  auto b = Session::join(a->invite(), fast_options(2, "b"));
+  ASSERT_TRUE(wait_until([&] { return a->stats().members == 2 && b->stats().members == 2; }));
+  Mesh mine = b->base();
+  Mesh theirs = a->base();
+  nudge(theirs, 3, 0.05f);
+  a->submit(theirs, 1);
+  ASSERT_TRUE(wait_until([&] {
+    a->update(theirs);
+    return a->version() == 1;
+  }));
+  // b edits on version 0, which the merger has left: its submit is never merged.
+  nudge(mine, 100, 0.05f);
+  ASSERT_TRUE(b->submit(mine, 2));
+  mine = b->base();  // the host takes the edit back
+  ASSERT_TRUE(wait_until([&] {
+    b->update(mine);
+    return b->version() == 1;
+  }));
+  EXPECT_EQ(b->stats().strokes_submitted, 2u);
+  EXPECT_EQ(b->stats().strokes_acknowledged, 2u);
+  EXPECT_TRUE(mine.positions == b->base().positions);
 }
 
 }  // namespace
