@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "csculpt/diff.h"
@@ -40,76 +41,77 @@ void nudge(Mesh& local, std::uint32_t vertex, float by) {
   local.positions.at(vertex).y += by;
 }
 
-TEST(SessionResend, ASubmitIgnoredByAMergerThatWasBehindGoesAgainOnceItCatchesUp) {
+/// A real author (id 5) and a hand-driven member (id 1) that claims the merger's role.
+struct AuthorAndFakeMerger {
   const Mesh sphere = make_sphere(400);
-  auto author = Session::create(sphere, fast_options(5, "author"));
+  std::unique_ptr<Session> author = Session::create(sphere, fast_options(5, "author"));
   Mesh local = author->base();
-  // Version 1, merged by the author while it is the only member.
-  nudge(local, 3, 0.05f);
-  author->submit(local, 1);
-  ASSERT_TRUE(wait_until([&] {
-    author->update(local);
-    return author->version() == 1;
-  }));
-
-  // A member with a lower id claims the merger's role, saying it holds only version 0.
-  FakePeer merger(author->invite(), 1);
+  FakePeer merger{author->invite(), 1};
   Seen seen;
-  merger.hello();
-  merger.pump(100ms, 20ms, std::ref(seen));
-  merger.claim_merger(100);
-  merger.says(0, 0, 1);
+
+  /// Joins the fake, which then claims the merger's role; true once the author follows it and
+  /// has said (heartbeat) that it holds `author_version`.
+  bool fake_merges(std::uint64_t author_version) {
+    merger.hello();
+    pump(100ms);
+    merger.claim_merger(100);
+    return wait_until([&] {
+      pump(20ms);
+      return author->stats().merger == 1 && seen.version == author_version && seen.chain != 0;
+    });
+  }
+  void pump(Millis span) { merger.pump(span, 20ms, std::ref(seen)); }
+  /// The author submits an edit; true once the fake merger received it.
+  bool submit_edit(std::uint32_t vertex) {
+    nudge(local, vertex, 0.05f);
+    const std::size_t before = seen.submits.size();
+    return author->submit(local, 1) && submits_reach(before + 1);
+  }
+  bool submits_reach(std::size_t n) {
+    return wait_until([&] {
+      pump(20ms);
+      return seen.submits.size() == n;
+    });
+  }
+};
+
+TEST(SessionResend, ASubmitIgnoredByAMergerThatWasBehindGoesAgainOnceItCatchesUp) {
+  AuthorAndFakeMerger t;
+  // Version 1, merged by the author while it is the only member.
+  nudge(t.local, 3, 0.05f);
+  t.author->submit(t.local, 1);
   ASSERT_TRUE(wait_until([&] {
-    merger.pump(20ms, 20ms, std::ref(seen));
-    return author->stats().merger == 1 && seen.version == 1;
+    t.author->update(t.local);
+    return t.author->version() == 1;
   }));
+  // The fake merger says it holds only version 0 (of another chain): behind the author.
+  t.merger.says(0, 0, 1);
+  ASSERT_TRUE(t.fake_merges(1));
 
   // The author's next edit goes to the merger, which is behind it: a real merger ignores it.
-  nudge(local, 40, 0.05f);
-  ASSERT_TRUE(author->submit(local, 1));
-  ASSERT_TRUE(wait_until([&] {
-    merger.pump(20ms, 20ms, std::ref(seen));
-    return seen.submits.size() == 1;
-  }));
-  merger.pump(300ms, 20ms, std::ref(seen));  // still behind: nothing is sent again
-  EXPECT_EQ(seen.submits.size(), 1u);
+  ASSERT_TRUE(t.submit_edit(40));
+  t.pump(300ms);  // still behind: nothing is sent again
+  EXPECT_EQ(t.seen.submits.size(), 1u);
 
   // Caught up (version 1, the author's chain): the same submit comes again, once.
-  merger.says(1, seen.chain, 1);
-  ASSERT_TRUE(wait_until([&] {
-    merger.pump(20ms, 20ms, std::ref(seen));
-    return seen.submits.size() == 2;
-  }));
-  EXPECT_EQ(seen.submits[1], seen.submits[0]);
-  merger.pump(300ms, 20ms, std::ref(seen));
-  EXPECT_EQ(seen.submits.size(), 2u);
-  EXPECT_EQ(author->stats().submits_resent, 1u);
+  t.merger.says(1, t.seen.chain, 1);
+  ASSERT_TRUE(t.submits_reach(2));
+  EXPECT_EQ(t.seen.submits[1], t.seen.submits[0]);
+  t.pump(300ms);
+  EXPECT_EQ(t.seen.submits.size(), 2u);
+  EXPECT_EQ(t.author->stats().submits_resent, 1u);
 }
 
 TEST(SessionResend, ASubmitTheMergerCouldTakeIsNotSentAgain) {
-  const Mesh sphere = make_sphere(400);
-  auto author = Session::create(sphere, fast_options(5, "author"));
-  Mesh local = author->base();
-  FakePeer merger(author->invite(), 1);
-  Seen seen;
-  merger.hello();
-  merger.pump(100ms, 20ms, std::ref(seen));
-  merger.claim_merger(100);
-  ASSERT_TRUE(wait_until([&] {
-    merger.says(0, seen.chain, 1);  // holds the author's version 0 and chain
-    merger.pump(20ms, 20ms, std::ref(seen));
-    return author->stats().merger == 1 && seen.chain != 0;
-  }));
-  merger.pump(100ms, 20ms, std::ref(seen));
-  nudge(local, 40, 0.05f);
-  ASSERT_TRUE(author->submit(local, 1));
-  ASSERT_TRUE(wait_until([&] {
-    merger.pump(20ms, 20ms, std::ref(seen));
-    return seen.submits.size() == 1;
-  }));
-  merger.pump(400ms, 20ms, std::ref(seen));
-  EXPECT_EQ(seen.submits.size(), 1u);
-  EXPECT_EQ(author->stats().submits_resent, 0u);
+  AuthorAndFakeMerger t;
+  t.merger.says(0, 0, 1);
+  ASSERT_TRUE(t.fake_merges(0));
+  t.merger.says(0, t.seen.chain, 1);  // holds the author's version 0 and chain
+  t.pump(100ms);
+  ASSERT_TRUE(t.submit_edit(40));
+  t.pump(400ms);
+  EXPECT_EQ(t.seen.submits.size(), 1u);
+  EXPECT_EQ(t.author->stats().submits_resent, 0u);
 }
 
 // A submit no version took (stale at the merger), whose edit the host then took back: the
