@@ -363,6 +363,7 @@ void print_summary(const peer::Session& session, const Mesh& local, std::uint32_
       .num("lost_edits", lost)
       .num("submits", st.submits)
       .num("submit_bytes", st.submit_bytes)
+      .num("submits_resent", st.submits_resent)
       .num("versions_applied", st.versions_applied)
       .num("rebases", st.rebases)
       .num("branch_rebases", st.branch_rebases)

@@ -128,6 +128,8 @@ struct Session::Impl {
   /// Sends `d` (the host's edit from the base, captured from `local`) unless it is empty or was
   /// sent already; `local` then holds what the peers receive. False when nothing was sent.
   bool send(const Diff& d, Mesh& local, std::uint32_t strokes);
+  /// send() found nothing to send; `at_base`: the host's mesh is the base. False.
+  bool nothing_to_send(bool at_base, std::uint32_t strokes);
   /// Throws InvalidInput naming the first of `changed` out of the mesh's range.
   void require_in_range(std::span<const std::uint32_t> changed, const char* call) const;
   /// touched + `changed` (any order, repeats allowed) into `candidates`, increasing. Throws
@@ -329,28 +331,11 @@ std::span<const std::uint32_t> Session::touched() const {
 
 bool Session::Impl::send(const Diff& d, Mesh& local, std::uint32_t strokes) {
   check_diff_values(d, base, frame, "submit");  // the changed values: before anything is sent
-  const bool empty =
-      d.positions.empty() && std::all_of(d.channels.begin(), d.channels.end(),
-                                         [](const auto& c) { return c.change.empty(); });
-  if (empty || (host_state_sent && same_change(d, host_state))) {
-    // Nothing new to send: these strokes changed nothing the session does not hold or is not
-    // already sent, so they are acknowledged as they are (not left unacknowledged for ever).
-    strokes_submitted += strokes;
-    strokes_acknowledged += strokes;
-    // The host's mesh is the agreed base and nothing of ours is in flight: strokes sent before
-    // are in the base (a snapshot carried them) or the host took them back. None waits for a
-    // version any more, so none is left counted unacknowledged for ever.
-    if (empty && submitted.empty()) {
-      strokes_acknowledged += unacknowledged_strokes;
-      unacknowledged_strokes = 0;
-    }
-    return false;
-  }
-  unacknowledged_strokes += strokes;
-  strokes_submitted += strokes;
+  if (d.empty() || (host_state_sent && same_change(d, host_state)))
+    return nothing_to_send(d.empty(), strokes);
   DiffHeader header;
   header.base_version = version;
-  header.sequence = next_sequence++;
+  header.sequence = next_sequence;
   header.author = options.name;
   Diff sent;  // what the peers decode
   Bytes bytes = encode_diff(d, base, header, session_wire_options(options.wire, frame), &sent);
@@ -361,6 +346,15 @@ bool Session::Impl::send(const Diff& d, Mesh& local, std::uint32_t strokes) {
   // Local now differs from the base at most where `sent` changes it.
   retouch(local, csculpt::peer::touched(sent));
   host_state = captured;  // assigned into its kept capacity: no allocation per submit
+  // Every change within the wire's tolerance of the base (a rebase's float rounding): the host's
+  // mesh is the base again, and an empty submit would only make an empty version.
+  if (sent.empty()) {
+    host_state_sent = false;
+    return nothing_to_send(true, strokes);
+  }
+  ++next_sequence;
+  unacknowledged_strokes += strokes;
+  strokes_submitted += strokes;
   host_state_sent = true;
   strokes_at[header.sequence] = unacknowledged_strokes;
   submitted[header.sequence] = std::move(sent);
@@ -371,6 +365,21 @@ bool Session::Impl::send(const Diff& d, Mesh& local, std::uint32_t strokes) {
   c.strokes = unacknowledged_strokes;
   node->command(std::move(c));
   return true;
+}
+
+bool Session::Impl::nothing_to_send(bool at_base, std::uint32_t strokes) {
+  // These strokes changed nothing the session does not hold or has not sent already: they are
+  // acknowledged as they are, not left unacknowledged for ever.
+  strokes_submitted += strokes;
+  strokes_acknowledged += strokes;
+  // The host's mesh is the agreed base and nothing of ours is in flight: strokes sent before
+  // are in the base (a snapshot carried them) or the host took them back. None waits for a
+  // version any more.
+  if (at_base && submitted.empty()) {
+    strokes_acknowledged += unacknowledged_strokes;
+    unacknowledged_strokes = 0;
+  }
+  return false;
 }
 
 std::pair<Mesh, std::uint64_t> Session::Impl::fork_base(const HostItem& item) {

@@ -5,6 +5,7 @@
 // driven member (FakePeer) so that "behind" and "caught up" happen when the test says.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -141,6 +142,22 @@ TEST(SessionResend, StrokesWithNothingLeftToSendAreNotLeftUnacknowledged) {
   EXPECT_EQ(b->stats().strokes_submitted, 2u);
   EXPECT_EQ(b->stats().strokes_acknowledged, 2u);
   EXPECT_TRUE(mine.positions == b->base().positions);
+}
+
+// An edit the wire's quantisation rounds away entirely (a rebase's float rounding leaves such
+// differences) is not sent: an empty submit would make an empty version, and a session that
+// had converged would go on making versions, one per merger that takes it.
+TEST(SessionResend, AnEditWithinTheWireToleranceIsNotSentAndMakesNoVersion) {
+  const Mesh sphere = make_sphere(400);
+  auto a = Session::create(sphere, fast_options(1, "a"));
+  Mesh local = a->base();
+  local.positions.at(7).x = std::nextafter(local.positions[7].x, 10.f);
+  EXPECT_FALSE(a->submit(local, 1));
+  EXPECT_TRUE(local.positions == a->base().positions);  // back to the base
+  EXPECT_EQ(a->stats().strokes_acknowledged, 1u);
+  EXPECT_FALSE(wait_until([&] { return a->update(local) > 0; }, 300ms));
+  EXPECT_EQ(a->version(), 0u);
+  EXPECT_EQ(a->stats().submits, 0u);
 }
 
 }  // namespace

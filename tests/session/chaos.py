@@ -242,7 +242,8 @@ def check(cluster):
     return {"markers_made": made, "markers_acknowledged": acked, "markers_lost": 0,
             "version": summaries[0]["version"],
             "branch_rebases": sum(s["branch_rebases"] for s in summaries),
-            "branch_versions_dropped": sum(s["branch_versions_dropped"] for s in summaries)}
+            "branch_versions_dropped": sum(s["branch_versions_dropped"] for s in summaries),
+            "submits_resent": sum(s["submits_resent"] for s in summaries)}
 
 
 def diagnose(cluster, reason):

@@ -2,6 +2,7 @@
 // connectivity (paper §3: ΔM = {Δv^i}, i in E).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -34,6 +35,11 @@ struct Diff {
   std::vector<ChannelDiff> channels;  ///< one per channel of the base, in the base's order
   /// Vertices changed in any attribute.
   std::size_t touched_vertices() const;
+  /// No vertex changed in any attribute.
+  bool empty() const {
+    return positions.empty() && std::all_of(channels.begin(), channels.end(),
+                                            [](const ChannelDiff& c) { return c.change.empty(); });
+  }
   friend bool operator==(const Diff&, const Diff&) = default;
 };
 
