@@ -210,10 +210,15 @@ class Schedule:
 
 def check(cluster):
     """The checker; returns the figures, raises AssertionError saying what failed."""
-    live = list(cluster.live.values())
-    for p in live:
+    # The merger quits last: a merger leaving first makes the others elect another, which
+    # would merge anything still pending into a version only the peers quitting later see.
+    merger = cluster.merger_position()
+    live = sorted(cluster.live.values(), key=lambda p: cluster.live.get(merger) is p)
+    for p in live[:-1]:
         p.quit()
-    summaries = [p.summary(60) for p in live]
+    summaries = [p.summary(60) for p in live[:-1]]
+    live[-1].quit()
+    summaries.append(live[-1].summary(60))
     digests = {s["digest"] for s in summaries}
     versions = {s["version"] for s in summaries}
     if len(digests) != 1 or len(versions) != 1:
