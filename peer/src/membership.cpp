@@ -40,8 +40,10 @@ bool Membership::learnt(PeerId peer, const std::string& endpoint, Clock::time_po
   return true;
 }
 
-bool Membership::remove(PeerId peer) {
+bool Membership::remove(PeerId peer, Clock::time_point now) {
   if (peer == self_) return false;
+  // As after an expiry: members that have not yet heard it leave still gossip it.
+  tombstones_[peer] = now;
   return members_.erase(peer) != 0;
 }
 

@@ -296,7 +296,7 @@ void PeerNode::learn_members(const fb::Heartbeat& hb, Clock::time_point now) {
 
 void PeerNode::on_leave(PeerId peer) {
   if (!membership_.contains(peer)) return;
-  membership_.remove(peer);  // its socket closes later, with those of expired peers
+  membership_.remove(peer, Clock::now());  // its socket closes later, with those of expired peers
   departed(peer, "left");
   elect();
 }

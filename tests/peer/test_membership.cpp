@@ -38,6 +38,18 @@ TEST(Membership, GossipAboutAnExpiredPeerIsNotBelievedAtOnce) {
   EXPECT_TRUE(m.heard(9, "tcp://c", t0));  // direct contact is always believed
 }
 
+// A member that has not yet heard a peer leave still lists it in its heartbeats: that gossip
+// must not bring the peer back (its cursor gone, it showed as live until it expired again).
+TEST(Membership, GossipAboutAPeerThatLeftIsNotBelievedAtOnce) {
+  const Clock::time_point t0{};
+  Membership m(5, "tcp://a", thresholds());
+  m.heard(7, "tcp://b", t0);
+  EXPECT_TRUE(m.remove(7, t0 + 100ms));
+  EXPECT_FALSE(m.learnt(7, "tcp://b", t0 + 200ms));
+  EXPECT_FALSE(m.contains(7));
+  EXPECT_TRUE(m.learnt(7, "tcp://b", t0 + 100ms + 1300ms));
+}
+
 TEST(Election, LowestLivePeerMergesAndAnnouncesANewEpoch) {
   const Clock::time_point t0{};
   Membership m(5, "tcp://a", thresholds());

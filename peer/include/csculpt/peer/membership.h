@@ -50,8 +50,9 @@ class Membership {
   /// We learnt of `peer` from someone else (gossip): added as if heard at `now`, so an
   /// unreachable one expires after the threshold. Returns true if it is new.
   bool learnt(PeerId peer, const std::string& endpoint, Clock::time_point now);
-  /// `peer` said it leaves (or is known dead): removed at once.
-  bool remove(PeerId peer);
+  /// `peer` said it leaves at `now` (or is known dead): removed at once, and gossip about it
+  /// is not believed for a while (as after an expiry).
+  bool remove(PeerId peer, Clock::time_point now);
   /// Applies the thresholds at `now`: marks evasive peers, removes expired ones.
   Changes tick(Clock::time_point now);
 
