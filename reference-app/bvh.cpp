@@ -38,7 +38,6 @@ void TriangleBvh::build(const std::vector<float>& positions,
   nodes_.reserve(2 * count / kLeafSize + 1);
   parent_.clear();
   order_.resize(count);
-  leaf_of_triangle_.assign(count, 0);
   std::vector<glm::vec3> centroids(count);
   for (uint32_t t = 0; t < count; ++t) {
     order_[t] = t;
@@ -65,7 +64,6 @@ uint32_t TriangleBvh::build_node(const std::vector<float>& positions,
   if (end - begin <= kLeafSize) {
     nodes_[index].first = begin;
     nodes_[index].count = end - begin;
-    for (uint32_t i = begin; i < end; ++i) leaf_of_triangle_[order_[i]] = index;
     fit_leaf(nodes_[index], positions, triangles);
     return index;
   }
@@ -91,20 +89,25 @@ uint32_t TriangleBvh::build_node(const std::vector<float>& positions,
   return index;
 }
 
+template <typename Take>
+void TriangleBvh::each_corner(const std::vector<uint32_t>& triangles, uint32_t n,
+                              Take&& take) const {
+  const Node& node = nodes_[n];
+  for (uint32_t i = node.first; node.count > 0 && i < node.first + node.count; ++i)
+    for (int c = 0; c < 3; ++c) take(triangles[3 * size_t{order_[i]} + c]);
+}
+
 void TriangleBvh::assign_vertices(const std::vector<uint32_t>& triangles, size_t vertex_count) {
   std::vector<uint8_t> taken(vertex_count, 0);
   owned_.clear();
   owned_begin_.assign(nodes_.size() + 1, 0);
   for (uint32_t n = 0; n < nodes_.size(); ++n) {
     owned_begin_[n] = static_cast<uint32_t>(owned_.size());
-    const Node& node = nodes_[n];
-    for (uint32_t i = node.first; node.count > 0 && i < node.first + node.count; ++i)
-      for (int c = 0; c < 3; ++c) {
-        const uint32_t v = triangles[3 * size_t{order_[i]} + c];
-        if (taken[v]) continue;
-        taken[v] = 1;
-        owned_.push_back(v);
-      }
+    each_corner(triangles, n, [&](uint32_t v) {
+      if (taken[v]) return;
+      taken[v] = 1;
+      owned_.push_back(v);
+    });
   }
   owned_begin_[nodes_.size()] = static_cast<uint32_t>(owned_.size());
 }
@@ -116,14 +119,11 @@ void TriangleBvh::index_vertex_leaves(const std::vector<uint32_t>& triangles, si
   vertex_leaves_begin_.assign(vertex_count + 1, 0);
   auto each_new = [&](auto&& take) {
     for (uint32_t n = 0; n < nodes_.size(); ++n)
-      for (uint32_t i = nodes_[n].first;
-           nodes_[n].count > 0 && i < nodes_[n].first + nodes_[n].count; ++i)
-        for (int c = 0; c < 3; ++c) {
-          const uint32_t v = triangles[3 * size_t{order_[i]} + c];
-          if (last[v] == n) continue;
-          last[v] = n;
-          take(v, n);
-        }
+      each_corner(triangles, n, [&](uint32_t v) {
+        if (last[v] == n) return;
+        last[v] = n;
+        take(v, n);
+      });
   };
   each_new([&](uint32_t v, uint32_t) { ++vertex_leaves_begin_[v + 1]; });
   for (size_t v = 0; v < vertex_count; ++v) vertex_leaves_begin_[v + 1] += vertex_leaves_begin_[v];

@@ -49,6 +49,9 @@ class TriangleBvh {
   uint32_t build_node(const std::vector<float>& positions, const std::vector<uint32_t>& triangles,
                       std::vector<glm::vec3>& centroids, uint32_t begin, uint32_t end,
                       uint32_t parent, uint8_t depth);
+  /** Calls take(vertex) for every corner of node n's triangles, in order (none: inner node). */
+  template <typename Take>
+  void each_corner(const std::vector<uint32_t>& triangles, uint32_t n, Take&& take) const;
   /** Gives each vertex to the first leaf (in node order) holding a triangle of it. */
   void assign_vertices(const std::vector<uint32_t>& triangles, size_t vertex_count);
   /** Lists, for each vertex, the leaves holding a triangle of it (what refit grows). */
@@ -57,7 +60,7 @@ class TriangleBvh {
                 const std::vector<uint32_t>& triangles) const;
 
   std::vector<Node> nodes_;  // pre-order: children come after their parent
-  std::vector<uint32_t> order_, parent_, leaf_of_triangle_;
+  std::vector<uint32_t> order_, parent_;
   std::vector<uint8_t> depth_;  // of each node: refits go deepest first
   // The vertices node n owns: owned_[owned_begin_[n] .. owned_begin_[n + 1]) (leaves only).
   std::vector<uint32_t> owned_, owned_begin_;

@@ -5,7 +5,6 @@
 #pragma once
 
 #include <cstdint>
-#include <cstring>
 #include <functional>
 #include <optional>
 #include <string>
@@ -54,10 +53,12 @@ class FakePeer {
       transport_.wait(Millis{5});
       for (Inbound in; transport_.receive(in);) {
         if (!seen) continue;
-        // FlatBuffers reads 4-byte words: a ZeroMQ payload need not be aligned for them.
-        aligned_.resize((in.payload.size() + 7) / 8);
-        std::memcpy(aligned_.data(), in.payload.data(), in.payload.size());
-        seen(*fb::GetEnvelope(aligned_.data()));
+        // Checked and aligned as a peer reads it.
+        const Opened opened =
+            open_envelope({static_cast<const std::uint8_t*>(in.payload.data()), in.payload.size()},
+                          {static_cast<const std::uint8_t*>(in.routing.data()), in.routing.size()},
+                          invite_.session, id_, inbound_);
+        if (opened.envelope) seen(*opened.envelope);
       }
     }
   }
@@ -68,7 +69,7 @@ class FakePeer {
   std::uint64_t epoch_ = 0, version_ = 0, chain_ = 0;
   PeerId merger_ = 0;
   Transport transport_;
-  std::vector<std::uint64_t> aligned_;
+  std::vector<std::uint64_t> inbound_;  // aligned copy of a misaligned message
 };
 
 }  // namespace csculpt::peer::testing
