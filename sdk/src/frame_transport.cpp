@@ -234,15 +234,25 @@ void Transport::finish_weights(std::size_t chunks) {
       if (i == j) continue;
       // squared, so that the finer edit's share falls as the fourth power of the scale ratio
       const double ij = e[i * n_ + j] * e[i * n_ + j], ji = e[j * n_ + i] * e[j * n_ + i];
-      w[i * n_ + j] = ij + ji > 0 ? ji / (ij + ji) : 0.5;
+      const double share = ij + ji > 0 ? ji / (ij + ji) : 0.5;
+      // Only a coarser edit is a frame: two edits of one scale (a grab beside a twist, the
+      // strokes a session merges and rebases every sync) add, each at full share of neither.
+      // Carried halfway through each other's steep rotations they creased where they met.
+      w[i * n_ + j] = std::max(0.0, 2.0 * share - 1.0);
     }
 }
+
+/// How close two displacements must be, relative to the smaller, to count partly as one.
+/// Identical edits are one intent; two artists pushing the same way by similar amounts are
+/// two, and a sameness that faded over the whole range between them creased the surface
+/// where their ratio changed (sessions rebase such overlaps every sync).
+constexpr double kSameTolerance = 0.1;
 
 /// s_ij: 1 for the same displacement, 0 for unrelated ones (or either zero). Measured against
 /// the smaller of the two: a small detail moving the same way as a large edit around it is
 /// not a copy of it (against the larger, a 0.02 grab inside a 0.05 swirl counted 8 % as one).
 double sameness(const VertexState& s, std::size_t i, std::size_t j) {
-  const double m = std::min(s.size[i], s.size[j]);
+  const double m = kSameTolerance * std::min(s.size[i], s.size[j]);
   if (!(m > 0)) return 0;
   const double r = std::max(0.0, 1.0 - std::sqrt(norm2(sub(s.d[i], s.d[j]))) / m);
   return r * r;

@@ -14,14 +14,16 @@
 //   surface about its normal: at the rim of a grab or a pinch the faces' closest rotations
 //   spin in the tangent plane, and a sideways detail turned by that spin lands elsewhere
 //   (measured: 0.24 -> 0.03 rel_err for the chin pinch under a twist, four_artists_monkey).
-// - g_ij = (1 - s_ij) w_ij: whether i's frame carries j. w_ij = E_ji^2 / (E_ij^2 + E_ji^2) with
+// - g_ij = (1 - s_ij) w_ij: whether i's frame carries j. w_ij = max(0, 2 a_ij - 1) with
+//   a_ij = E_ji^2 / (E_ij^2 + E_ji^2) and
 //   E_ij = sum_v |(R_i - I) d_j|^2, the change i's whole rotations would make to j's
 //   displacement (with the spin: a small grab's spin marks it as the finer edit);
 //   the coarser edit changes the finer one's displacement little and the finer edit's
 //   rotations would change the coarser's a lot, so the coarser edit carries the finer one
-//   (for a bump of width w on a bend of radius r the ratio is (r / w)^2). Every term is
+//   (for a bump of width w on a bend of radius r the ratio is (r / w)^2). Edits of one scale
+//   (a_ij = 1/2) carry neither: they add, as strokes one after the other would. Every term is
 //   bounded by |(R_i - I) d_j|, so the result is continuous even where the weights switch.
-// - s_ij = max(0, 1 - |d_i - d_j| / min(|d_i|, |d_j|))^2 and c_j = sum_k s_jk count each
+// - s_ij = max(0, 1 - |d_i - d_j| / (0.1 min(|d_i|, |d_j|)))^2 and c_j = sum_k s_jk count each
 //   intent once: identical edits come back once (idempotence), independent ones add, and a
 //   small edit inside a large one moving the same way is not taken for a copy of it.
 // - Coincident vertices that are not connected (split seams) share one rotation per diff,
