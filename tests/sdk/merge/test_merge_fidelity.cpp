@@ -290,11 +290,11 @@ Mesh lockstep_session(const Mesh& base, const Hierarchy& h,
 // session merging and rebasing by plain addition (10 % slack; the counts are printed).
 TEST(MergeFidelity, EditsOfOneScaleAddInsteadOfCreasingEachOther) {
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-  const std::uint32_t faces = 40000, ticks = 20;  // the property only; the release build
-#else                                             // runs the size that tells old from new
-  const std::uint32_t faces = 320000, ticks = 100;
+  // Smaller sessions crease nowhere under either method, so nothing would be compared; the
+  // release phase runs it (the merges themselves are covered under the sanitizers above).
+  GTEST_SKIP() << "minutes under the sanitizers at the size where creases appear";
 #endif
-  const std::uint32_t artists = 3;
+  const std::uint32_t faces = 320000, ticks = 100, artists = 3;
   const Mesh base = make_sphere(faces);
   const Hierarchy h = Hierarchy::build(base);
   for (std::uint64_t seed : {1u, 3u}) {
