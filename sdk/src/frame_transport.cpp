@@ -63,6 +63,8 @@ class Transport {
   void load(std::size_t at, VertexState& s) const;
   Quat rotation(std::size_t at, std::size_t i) const;
   Vec3d base_normal(std::uint32_t v) const;
+  double edge_length(std::uint32_t v) const;
+  Quat carrier(std::size_t at, std::size_t i, double span) const;
   Vec3d normal(std::size_t at) const;
 
   const Topology& topology_;
@@ -159,6 +161,42 @@ Quat Transport::rotation(std::size_t at, std::size_t i) const {
   return has(users_[i].rotated, v) ? users_[i].isometry[v].real : Quat{};
 }
 
+/// The mean edge length around v, from the area of its base faces (equilateral triangles of
+/// that area); 0 when it has none.
+double Transport::edge_length(std::uint32_t v) const {
+  double area = 0;
+  std::size_t faces = 0;
+  for (std::uint32_t f : topology_.vertex_faces.row(v)) {
+    const Triangle& t = topology_.triangles[f];
+    const Vec3d p0 = widen(base_[t[0]]);
+    area += std::sqrt(norm2(cross(sub(widen(base_[t[1]]), p0), sub(widen(base_[t[2]]), p0)))) / 2;
+    ++faces;
+  }
+  return faces ? std::sqrt(4 / std::sqrt(3.0) * area / static_cast<double>(faces)) : 0.0;
+}
+
+/// Diff i's rotation at the listed vertex `at` read across `span` edges around it: the
+/// vertex's own up to one edge, then the hierarchy's averages, interpolated between levels so
+/// that it changes continuously with the span. Split seams keep their shared rotation.
+Quat Transport::carrier(std::size_t at, std::size_t i, double span) const {
+  if (!(span > 1) || scratch_.seam_of[at] != kNoSeam || !users_[i].smoothed[1])
+    return rotation(at, i);
+  const std::uint32_t v = vertices_[at];
+  const double level = std::min(std::log2(span), static_cast<double>(kCarryLevels - 1));
+  const auto below = static_cast<std::size_t>(level);
+  const double f = level - static_cast<double>(below);
+  const Quat a = below == 0 ? rotation(at, i) : users_[i].smoothed[below][v];
+  if (!(f > 0)) return a;
+  Quat b = users_[i].smoothed[below + 1][v];
+  if (dot(a, b) < 0) b = -1.f * b;
+  const double w = a.w + f * (b.w - a.w), x = a.x + f * (b.x - a.x), y = a.y + f * (b.y - a.y),
+               z = a.z + f * (b.z - a.z);
+  const double len = std::sqrt(w * w + x * x + y * y + z * z);
+  if (!(len > 0)) return a;
+  return {static_cast<float>(w / len), static_cast<float>(x / len), static_cast<float>(y / len),
+          static_cast<float>(z / len)};
+}
+
 /// The unit area-weighted normal of v's base faces (zero when it has none).
 Vec3d Transport::base_normal(std::uint32_t v) const {
   Vec3d sum{};
@@ -243,10 +281,12 @@ void Transport::finish_weights(std::size_t chunks) {
 }
 
 /// How close two displacements must be, relative to the smaller, to count partly as one.
-/// Identical edits are one intent; two artists pushing the same way by similar amounts are
-/// two, and a sameness that faded over the whole range between them creased the surface
-/// where their ratio changed (sessions rebase such overlaps every sync).
-constexpr double kSameTolerance = 0.1;
+/// Identical edits are one intent (the same edit merged twice, what two branches of a
+/// session share); two artists pushing the same way by similar amounts are two. Wherever a
+/// sameness band lies, the merged displacement dips there, so it is kept to float rounding:
+/// two inflates along one normal, whose heights cross, creased the surface along the band
+/// where they were within a tenth of each other (sessions rebase such overlaps every sync).
+constexpr double kSameTolerance = 0.001;
 
 /// s_ij: 1 for the same displacement, 0 for unrelated ones (or either zero). Measured against
 /// the smaller of the two: a small detail moving the same way as a large edit around it is
@@ -268,7 +308,8 @@ Vec3f Transport::merged(std::size_t at) const {
   const std::uint32_t v = vertices_[at];
   const Vec3f& b = base_[v];
   Vec3d sum{}, n{};
-  bool have_normal = false;  // computed only where one edit carries another
+  double edge = 0;
+  bool have_normal = false;  // normal and edge: computed only where one edit carries another
   for (std::size_t j = 0; j < n_; ++j) {
     if (!s.moves[j]) continue;
     double count = 1;
@@ -279,8 +320,9 @@ Vec3f Transport::merged(std::size_t at) const {
       if (i == j || !s.turns[i]) continue;
       const double g = (1.0 - same(s, i, j)) * scratch_.weight[i * n_ + j];
       if (!(g > 0)) continue;
-      if (!have_normal) n = normal(at), have_normal = true;
-      carried = add(carried, scale(rotation_change(swing(s.rotation[i], n), carried), g));
+      if (!have_normal) n = normal(at), edge = edge_length(v), have_normal = true;
+      const Quat frame = carrier(at, i, edge > 0 ? s.size[j] / edge : 0.0);
+      carried = add(carried, scale(rotation_change(swing(frame, n), carried), g));
     }
     sum = add(sum, count == 1 ? carried : scale(carried, 1.0 / count));
   }
@@ -294,6 +336,7 @@ void transport_positions(const Topology& topology, std::span<const Vec3f> base,
                          std::span<const std::uint32_t> vertices,
                          std::span<const TransportInput> users, bool same_once,
                          TransportScratch& scratch, WorkerPool& pool, std::size_t grain,
+                         const std::function<void(std::span<const bool>)>& carriers,
                          std::span<Vec3f> moved) {
   Transport t(topology, base, vertices, users, same_once, scratch);
   t.find_seams();
@@ -306,6 +349,10 @@ void transport_positions(const Topology& topology, std::span<const Vec3f> base,
     t.chunk_energy(begin, end, scratch.chunk_energy.data() + (begin / grain) * n * n);
   });
   t.finish_weights(chunks);
+  std::array<bool, kMaxUsers> carries{};
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j < n; ++j) carries[i] = carries[i] || scratch.weight[i * n + j] > 0;
+  carriers(std::span<const bool>(carries.data(), n));
   pool.for_chunks(vertices.size(), grain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t at = begin; at < end; ++at) moved[at] = t.merged(at);
   });

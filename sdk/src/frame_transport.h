@@ -9,6 +9,13 @@
 // - T_j transports a displacement into the frame the other edits give the surface there: a
 //   detail on a bend turns with the bend and keeps its height, on a cast it follows the new
 //   normals. Where no other diff rotates v, T_j = I and the edit comes back exactly.
+// - R_i is read at the scale of the displacement it carries: averaged over the hierarchy
+//   (level l spans about 2^l edges) across |d_j| / h edges around v, h the local edge length,
+//   interpolated between levels. A displacement of several edges rides the turn of the
+//   surface around it, as a brush's stroke follows the surface under its footprint; read
+//   vertex by vertex, the rough rotations of a finer stroke beside it sheared it into creases
+//   (a session's rebases meet that every sync). A detail of an edge or less reads the
+//   vertex's own rotation, so it follows the deformed normals exactly.
 // - S_i is the swing of R_i about the base normal n (R_i = S_i * twist about n): the turn
 //   that takes n to R_i n. A displacement rides the turn of the surface, not a spin of the
 //   surface about its normal: at the rim of a grab or a pinch the faces' closest rotations
@@ -23,9 +30,9 @@
 //   (for a bump of width w on a bend of radius r the ratio is (r / w)^2). Edits of one scale
 //   (a_ij = 1/2) carry neither: they add, as strokes one after the other would. Every term is
 //   bounded by |(R_i - I) d_j|, so the result is continuous even where the weights switch.
-// - s_ij = max(0, 1 - |d_i - d_j| / (0.1 min(|d_i|, |d_j|)))^2 and c_j = sum_k s_jk count each
-//   intent once: identical edits come back once (idempotence), independent ones add, and a
-//   small edit inside a large one moving the same way is not taken for a copy of it.
+// - s_ij = max(0, 1 - |d_i - d_j| / (0.001 min(|d_i|, |d_j|)))^2 and c_j = sum_k s_jk count
+//   each intent once: identical edits come back once (idempotence), independent ones add, and
+//   two edits moving the same way by similar amounts (two inflates along one normal) are two.
 // - Coincident vertices that are not connected (split seams) share one rotation per diff,
 //   so a seam that the artists moved together stays closed.
 // Products and sums run in the canonical order of the diffs, per vertex in double, and the
@@ -33,7 +40,9 @@
 // thread count or SIMD width.
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -44,6 +53,10 @@
 
 namespace csculpt::detail {
 
+/// Levels of the hierarchy a carrying rotation is read at: 0 (the vertex's own) to 4 (about
+/// 16 edges around it). A displacement longer than that still reads level 4.
+constexpr std::size_t kCarryLevels = 5;
+
 /// One diff as the transport reads it, in the merge's canonical order.
 struct TransportInput {
   /// Per vertex: its rotation under this diff, valid where `rotated` has the vertex's bit.
@@ -53,6 +66,10 @@ struct TransportInput {
   const std::uint32_t* slot = nullptr;
   const std::uint64_t* changed = nullptr;
   const float* edited = nullptr;  ///< xyz per changed vertex
+  /// Per level l in [1, kCarryLevels): the rotations averaged over the hierarchy's level l and
+  /// interpolated back to the vertices, valid where `rotated` has the vertex's bit (level 0
+  /// is `isometry`).
+  std::array<const Quat*, kCarryLevels> smoothed{};
 };
 
 /// Scratch reused across merges (no allocation once warm).
@@ -68,10 +85,13 @@ struct TransportScratch {
 /// Merged positions of the vertices in `vertices` (increasing: the union of the changed
 /// ones) into `moved` (one per vertex), using `pool` in chunks of `grain`. `same_once`: the
 /// sameness s as above; false takes s = 0 (SameChange::add: every displacement adds).
+/// `carriers(carries)`, once the weights are known and before any position is merged, sets
+/// `smoothed` of each input i with carries[i] (it carries another diff somewhere).
 void transport_positions(const Topology& topology, std::span<const Vec3f> base,
                          std::span<const std::uint32_t> vertices,
                          std::span<const TransportInput> users, bool same_once,
                          TransportScratch& scratch, WorkerPool& pool, std::size_t grain,
+                         const std::function<void(std::span<const bool>)>& carriers,
                          std::span<Vec3f> moved);
 
 }  // namespace csculpt::detail

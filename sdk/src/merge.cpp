@@ -735,6 +735,10 @@ struct Merger::Workspace {
   std::vector<std::size_t> chunk_offset;  ///< where each chunk of them starts in the list
   std::vector<detail::TransportInput> transport_inputs;
   detail::TransportScratch transport;
+  /// Per diff and carrying level (u * kCarryLevels + l): its rotations averaged over level l,
+  /// per vertex; and per such task, the levels between as scratch.
+  std::vector<std::vector<Quat>> carrying;
+  std::vector<std::vector<std::vector<Quat>>> carrying_scratch;
   detail::FoldRepairScratch fold_repair;
   detail::WorkerPool pool;
 };
@@ -842,7 +846,12 @@ struct Merger::Pass {
   const std::vector<std::size_t> order;  ///< canonical: diff u of the merge is diffs[order[u]]
   const MergeFrame frame;
   const std::uint32_t users = static_cast<std::uint32_t>(diffs.size());
-  const std::size_t level_count = t.multiscale ? hierarchy.levels().size() : 1;
+  /// The hierarchy's levels the positions use: all of them, the transport's carrying levels
+  /// (rotations averaged for carrying, not blended), or only the vertices.
+  const std::size_t level_count = t.multiscale ? hierarchy.levels().size()
+                                  : t.transport
+                                      ? std::min(hierarchy.levels().size(), detail::kCarryLevels)
+                                      : 1;
   const ParentLinks links{&hierarchy, t.tree};
   const std::uint32_t vertex_count = static_cast<std::uint32_t>(base.vertex_count());
   const detail::Frame local{frame.center, 1.f / frame.scale};
@@ -866,6 +875,13 @@ struct Merger::Pass {
   double diff_isometries(std::size_t u);
   void blend_isometries(std::size_t kept_chunks);
   void transport_positions();
+  void carrying_fields(std::span<const bool> carries);
+  void carrying_rotations(std::size_t u, std::size_t top, std::vector<std::vector<Quat>>& scratch);
+  bool moved_by_another(std::size_t u, std::uint32_t v) const {
+    for (std::uint32_t k = 0; k < users; ++k)
+      if (k != u && ws.lookups[k].changed.test(v)) return true;
+    return false;
+  }
   void repair_folds(std::span<const std::uint32_t> changed, std::span<Vec3f> moved);
   void count_kept(std::size_t begin, std::size_t end);
   void list_moved_positions(AttributeDiff& out, std::size_t chunks);
@@ -996,9 +1012,12 @@ void Merger::Pass::isometries_and_averages(Clock::time_point t0) {
       return;
     }
     iso_task_ms[u] = diff_isometries(u);
-    decompose<DqOps>(links, level_count, ws.dq_users[u]);
+    // The transport averages only the diffs that carry another (carrying_fields()).
+    if (!t.transport) decompose<DqOps>(links, level_count, ws.dq_users[u]);
   });
-  mark_coarse_union<DualQuat>(std::span(ws.dq_users.data(), users), level_count, ws.dq_merged);
+  // The transport reads each diff's averages, never a blend of them.
+  if (!t.transport)
+    mark_coarse_union<DualQuat>(std::span(ws.dq_users.data(), users), level_count, ws.dq_merged);
   // The region's time split: isometries = the longest diff's isometry part, the rest
   // (decomposition and its imbalance) to decompose.
   const double region_ms = ms_since(t0);
@@ -1071,13 +1090,80 @@ void Merger::Pass::transport_positions() {
     ws.transport_inputs[u] = {level0.values.data(), level0.bits.data(), ws.lookups[u].slot.data(),
                               ws.lookups[u].changed.words.data(), positions_of(u).values.data()};
   }
+  const std::function<void(std::span<const bool>)> carriers = [&](std::span<const bool> carries) {
+    carrying_fields(carries);
+  };
   detail::transport_positions(hierarchy.topology(), base.positions, changed_union,
                               ws.transport_inputs, t.same_once, ws.transport, ws.pool, kBlendGrain,
-                              std::span(ws.moved.data(), n_changed));
+                              carriers, std::span(ws.moved.data(), n_changed));
   for (std::uint32_t u = 0; u < users; ++u) ws.lookups[u].changed.clear(positions_of(u).indices);
   repair_folds(changed_union, std::span(ws.moved.data(), n_changed));
   ws.pool.for_chunks(n_changed, kBlendGrain,
                      [&](std::size_t begin, std::size_t end) { count_kept(begin, end); });
+}
+
+/// The carrying levels of each diff that carries another: one task per such diff and level,
+/// each writing only its own field and scratch.
+void Merger::Pass::carrying_fields(std::span<const bool> carries) {
+  const std::size_t levels = level_count - 1;
+  if (levels == 0) return;  // a hierarchy of one level: the vertices' own rotations
+  if (ws.carrying.size() < std::size_t{users} * detail::kCarryLevels)
+    ws.carrying.resize(std::size_t{users} * detail::kCarryLevels);
+  std::array<std::uint32_t, max_merge_diffs> carrier{};
+  std::size_t count = 0;
+  for (std::uint32_t u = 0; u < users; ++u)
+    if (carries[u]) carrier[count++] = u;
+  ws.pool.run(
+      count, [&](std::size_t k) { decompose<DqOps>(links, level_count, ws.dq_users[carrier[k]]); });
+  const std::size_t tasks = count * levels;
+  if (ws.carrying_scratch.size() < tasks) ws.carrying_scratch.resize(tasks);
+  ws.pool.run(tasks, [&](std::size_t task) {
+    carrying_rotations(carrier[task / levels], task % levels + 1, ws.carrying_scratch[task]);
+  });
+  for (std::size_t k = 0; k < count; ++k) {
+    detail::TransportInput& in = ws.transport_inputs[carrier[k]];
+    // Past the hierarchy's coarsest level, the coarsest average.
+    for (std::size_t l = 1; l < detail::kCarryLevels; ++l)
+      in.smoothed[l] = ws.carrying[carrier[k] * detail::kCarryLevels + std::min(l, levels)].data();
+  }
+}
+
+/// Diff u's rotations averaged over level `top` (decompose()) and interpolated back down the
+/// parent links to the vertices where it may carry another diff (it rotates them, another
+/// moves them): a node's value is the weighted average of its parents' offsets from the
+/// identity, normalised (absent parents are the identity).
+void Merger::Pass::carrying_rotations(std::size_t u, std::size_t top,
+                                      std::vector<std::vector<Quat>>& scratch) {
+  const SparsePyramid<DualQuat>& pyramid = ws.dq_users[u];
+  std::vector<Quat>& out = ws.carrying[u * detail::kCarryLevels + top];
+  if (out.size() < vertex_count) out.resize(vertex_count);
+  if (scratch.size() < top) scratch.resize(top);
+  for (std::size_t l = 1; l < top; ++l)
+    if (scratch[l].size() < hierarchy.levels()[l].node_count)
+      scratch[l].resize(hierarchy.levels()[l].node_count);
+  for (std::size_t l = top; l-- > 0;) {
+    const ParentLinks::Level fine = links.level(l);
+    const LevelView<DualQuat> coarse = LevelView<DualQuat>::of(pyramid.levels[l + 1]);
+    const Quat* above = l + 1 < top ? scratch[l + 1].data() : nullptr;
+    Quat* here = l == 0 ? out.data() : scratch[l].data();
+    for (const std::uint32_t c : pyramid.levels[l].list) {
+      if (l == 0 && !moved_by_another(u, c)) continue;
+      const ParentLinks::Level::Row row = fine.row(c);
+      float w = 0, x = 0, y = 0, z = 0, total = 0;
+      for (std::uint32_t k = 0; k < row.count; ++k) {
+        const std::uint32_t p = row.parents[k];
+        const float weight = row.weights[k];
+        total += weight;
+        if (!coarse.has(p)) continue;
+        const Quat q = above ? above[p] : coarse.values[p].real;
+        w += weight * (q.w - 1), x += weight * q.x, y += weight * q.y, z += weight * q.z;
+      }
+      const float scale = total > 0 ? 1 / total : 0.f;
+      const Quat q{1 + w * scale, x * scale, y * scale, z * scale};
+      const float length = std::sqrt(dot(q, q));
+      here[c] = length > 0 ? (1 / length) * q : Quat{};
+    }
+  }
 }
 
 void Merger::Pass::repair_folds(std::span<const std::uint32_t> changed, std::span<Vec3f> moved) {
