@@ -53,18 +53,20 @@ class Transport {
 
   void find_seams();
   void share_normals();
-  void chunk_energy(std::size_t begin, std::size_t end, double* energy) const;
+  /// The carrying energies of the chunk's vertices, and each one's carrying levels.
+  void chunk_energy(std::size_t begin, std::size_t end, double* energy);
   void finish_weights(std::size_t chunks);
   Vec3f merged(std::size_t at) const;
 
  private:
+  void plan_levels(std::size_t at, const VertexState& s);
   std::uint32_t group_coincident();
   void share_rotations(std::uint32_t groups);
   void load(std::size_t at, VertexState& s) const;
   Quat rotation(std::size_t at, std::size_t i) const;
   Vec3d base_normal(std::uint32_t v) const;
   double edge_length(std::uint32_t v) const;
-  Quat carrier(std::size_t at, std::size_t i, double span) const;
+  Quat carrier(std::size_t at, std::size_t i, double level) const;
   Vec3d normal(std::size_t at) const;
 
   const Topology& topology_;
@@ -175,14 +177,36 @@ double Transport::edge_length(std::uint32_t v) const {
   return faces ? std::sqrt(4 / std::sqrt(3.0) * area / static_cast<double>(faces)) : 0.0;
 }
 
-/// Diff i's rotation at the listed vertex `at` read across `span` edges around it: the
-/// vertex's own up to one edge, then the hierarchy's averages, interpolated between levels so
-/// that it changes continuously with the span. Split seams keep their shared rotation.
-Quat Transport::carrier(std::size_t at, std::size_t i, double span) const {
-  if (!(span > 1) || scratch_.seam_of[at] != kNoSeam || !users_[i].smoothed[1])
+/// The carrying level a displacement of `size` reads where edges are `edge` long: log2 of
+/// the edges it spans, 0 up to one edge, at most the last level (continuous in the size).
+double carrying_level(double size, double edge) {
+  const double span = edge > 0 ? size / edge : 0.0;
+  return span > 1 ? std::min(std::log2(span), static_cast<double>(kCarryLevels - 1)) : 0.0;
+}
+
+/// The listed vertex's edge length, and the levels its displacements read (the two around
+/// each one's level), so that only those are averaged there.
+void Transport::plan_levels(std::size_t at, const VertexState& s) {
+  const std::uint32_t v = vertices_[at];
+  scratch_.edge[at] = edge_length(v);
+  std::uint8_t bits = 0;
+  for (std::size_t j = 0; j < n_; ++j) {
+    if (!s.moves[j]) continue;
+    const double level = carrying_level(s.size[j], scratch_.edge[at]);
+    const auto below = static_cast<std::uint32_t>(level);
+    bits |= static_cast<std::uint8_t>(1u << below);
+    if (level > below) bits |= static_cast<std::uint8_t>(1u << (below + 1));
+  }
+  scratch_.reads_level[v] = bits;
+}
+
+/// Diff i's rotation at the listed vertex `at` read at carrying `level`: the vertex's own at
+/// level 0, then the hierarchy's averages, interpolated between levels so that it changes
+/// continuously with the level. Split seams keep their shared rotation.
+Quat Transport::carrier(std::size_t at, std::size_t i, double level) const {
+  if (!(level > 0) || scratch_.seam_of[at] != kNoSeam || !users_[i].smoothed[1])
     return rotation(at, i);
   const std::uint32_t v = vertices_[at];
-  const double level = std::min(std::log2(span), static_cast<double>(kCarryLevels - 1));
   const auto below = static_cast<std::size_t>(level);
   const double f = level - static_cast<double>(below);
   const Quat a = below == 0 ? rotation(at, i) : users_[i].smoothed[below][v];
@@ -247,11 +271,12 @@ void Transport::load(std::size_t at, VertexState& s) const {
   }
 }
 
-void Transport::chunk_energy(std::size_t begin, std::size_t end, double* energy) const {
+void Transport::chunk_energy(std::size_t begin, std::size_t end, double* energy) {
   std::fill(energy, energy + n_ * n_, 0.0);
   VertexState s;
   for (std::size_t at = begin; at < end; ++at) {
     load(at, s);
+    plan_levels(at, s);
     for (std::size_t i = 0; i < n_; ++i) {
       if (!s.turns[i]) continue;
       for (std::size_t j = 0; j < n_; ++j)
@@ -308,20 +333,20 @@ Vec3f Transport::merged(std::size_t at) const {
   const std::uint32_t v = vertices_[at];
   const Vec3f& b = base_[v];
   Vec3d sum{}, n{};
-  double edge = 0;
-  bool have_normal = false;  // normal and edge: computed only where one edit carries another
+  bool have_normal = false;  // computed only where one edit carries another
   for (std::size_t j = 0; j < n_; ++j) {
     if (!s.moves[j]) continue;
     double count = 1;
     for (std::size_t k = 0; k < n_; ++k)
       if (k != j && s.moves[k]) count += same(s, j, k);
     Vec3d carried = s.d[j];
+    const double level = carrying_level(s.size[j], scratch_.edge[at]);
     for (std::size_t i = n_; i-- > 0;) {
       if (i == j || !s.turns[i]) continue;
       const double g = (1.0 - same(s, i, j)) * scratch_.weight[i * n_ + j];
       if (!(g > 0)) continue;
-      if (!have_normal) n = normal(at), edge = edge_length(v), have_normal = true;
-      const Quat frame = carrier(at, i, edge > 0 ? s.size[j] / edge : 0.0);
+      if (!have_normal) n = normal(at), have_normal = true;
+      const Quat frame = carrier(at, i, level);
       carried = add(carried, scale(rotation_change(swing(frame, n), carried), g));
     }
     sum = add(sum, count == 1 ? carried : scale(carried, 1.0 / count));
@@ -332,18 +357,20 @@ Vec3f Transport::merged(std::size_t at) const {
 
 }  // namespace
 
-void transport_positions(const Topology& topology, std::span<const Vec3f> base,
-                         std::span<const std::uint32_t> vertices,
-                         std::span<const TransportInput> users, bool same_once,
-                         TransportScratch& scratch, WorkerPool& pool, std::size_t grain,
-                         const std::function<void(std::span<const bool>)>& carriers,
-                         std::span<Vec3f> moved) {
+void transport_positions(
+    const Topology& topology, std::span<const Vec3f> base, std::span<const std::uint32_t> vertices,
+    std::span<const TransportInput> users, bool same_once, TransportScratch& scratch,
+    WorkerPool& pool, std::size_t grain,
+    const std::function<void(std::span<const bool>, std::span<const std::uint8_t>)>& carriers,
+    std::span<Vec3f> moved) {
   Transport t(topology, base, vertices, users, same_once, scratch);
   t.find_seams();
   t.share_normals();
   const std::size_t n = users.size();
   const std::size_t chunks = std::max<std::size_t>(1, (vertices.size() + grain - 1) / grain);
   scratch.chunk_energy.resize(chunks * n * n);
+  scratch.edge.resize(vertices.size());
+  if (scratch.reads_level.size() < base.size()) scratch.reads_level.resize(base.size(), 0);
   std::fill(scratch.chunk_energy.begin(), scratch.chunk_energy.begin() + n * n, 0.0);
   pool.for_chunks(vertices.size(), grain, [&](std::size_t begin, std::size_t end) {
     t.chunk_energy(begin, end, scratch.chunk_energy.data() + (begin / grain) * n * n);
@@ -352,10 +379,11 @@ void transport_positions(const Topology& topology, std::span<const Vec3f> base,
   std::array<bool, kMaxUsers> carries{};
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t j = 0; j < n; ++j) carries[i] = carries[i] || scratch.weight[i * n + j] > 0;
-  carriers(std::span<const bool>(carries.data(), n));
+  carriers(std::span<const bool>(carries.data(), n), scratch.reads_level);
   pool.for_chunks(vertices.size(), grain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t at = begin; at < end; ++at) moved[at] = t.merged(at);
   });
+  for (const std::uint32_t v : vertices) scratch.reads_level[v] = 0;
 }
 
 }  // namespace csculpt::detail

@@ -80,18 +80,23 @@ struct TransportScratch {
   std::vector<std::uint32_t> seam_of;  ///< per listed vertex: its seam group or kNoSeam
   std::vector<std::uint32_t> table;    ///< open addressing by position: 1 + list index, 0 empty
   std::vector<Vec3d> seam_normal;      ///< per seam group: the sum of its members' normals
+  std::vector<double> edge;            ///< per listed vertex: its mean edge length
+  /// Per vertex: bit l set when a displacement there reads carrying level l (all clear
+  /// between merges).
+  std::vector<std::uint8_t> reads_level;
 };
 
 /// Merged positions of the vertices in `vertices` (increasing: the union of the changed
 /// ones) into `moved` (one per vertex), using `pool` in chunks of `grain`. `same_once`: the
 /// sameness s as above; false takes s = 0 (SameChange::add: every displacement adds).
-/// `carriers(carries)`, once the weights are known and before any position is merged, sets
-/// `smoothed` of each input i with carries[i] (it carries another diff somewhere).
-void transport_positions(const Topology& topology, std::span<const Vec3f> base,
-                         std::span<const std::uint32_t> vertices,
-                         std::span<const TransportInput> users, bool same_once,
-                         TransportScratch& scratch, WorkerPool& pool, std::size_t grain,
-                         const std::function<void(std::span<const bool>)>& carriers,
-                         std::span<Vec3f> moved);
+/// `carriers(carries, reads_level)`, once the weights are known and before any position is
+/// merged, sets `smoothed` of each input i with carries[i] (it carries another diff
+/// somewhere); level l is read only at the vertices v with bit l of reads_level[v].
+void transport_positions(
+    const Topology& topology, std::span<const Vec3f> base, std::span<const std::uint32_t> vertices,
+    std::span<const TransportInput> users, bool same_once, TransportScratch& scratch,
+    WorkerPool& pool, std::size_t grain,
+    const std::function<void(std::span<const bool>, std::span<const std::uint8_t>)>& carriers,
+    std::span<Vec3f> moved);
 
 }  // namespace csculpt::detail

@@ -875,13 +875,9 @@ struct Merger::Pass {
   double diff_isometries(std::size_t u);
   void blend_isometries(std::size_t kept_chunks);
   void transport_positions();
-  void carrying_fields(std::span<const bool> carries);
-  void carrying_rotations(std::size_t u, std::size_t top, std::vector<std::vector<Quat>>& scratch);
-  bool moved_by_another(std::size_t u, std::uint32_t v) const {
-    for (std::uint32_t k = 0; k < users; ++k)
-      if (k != u && ws.lookups[k].changed.test(v)) return true;
-    return false;
-  }
+  void carrying_fields(std::span<const bool> carries, std::span<const std::uint8_t> reads_level);
+  void carrying_rotations(std::size_t u, std::size_t top, std::span<const std::uint8_t> reads_level,
+                          std::vector<std::vector<Quat>>& scratch);
   void repair_folds(std::span<const std::uint32_t> changed, std::span<Vec3f> moved);
   void count_kept(std::size_t begin, std::size_t end);
   void list_moved_positions(AttributeDiff& out, std::size_t chunks);
@@ -1090,9 +1086,10 @@ void Merger::Pass::transport_positions() {
     ws.transport_inputs[u] = {level0.values.data(), level0.bits.data(), ws.lookups[u].slot.data(),
                               ws.lookups[u].changed.words.data(), positions_of(u).values.data()};
   }
-  const std::function<void(std::span<const bool>)> carriers = [&](std::span<const bool> carries) {
-    carrying_fields(carries);
-  };
+  const std::function<void(std::span<const bool>, std::span<const std::uint8_t>)> carriers =
+      [&](std::span<const bool> carries, std::span<const std::uint8_t> reads_level) {
+        carrying_fields(carries, reads_level);
+      };
   detail::transport_positions(hierarchy.topology(), base.positions, changed_union,
                               ws.transport_inputs, t.same_once, ws.transport, ws.pool, kBlendGrain,
                               carriers, std::span(ws.moved.data(), n_changed));
@@ -1104,7 +1101,8 @@ void Merger::Pass::transport_positions() {
 
 /// The carrying levels of each diff that carries another: one task per such diff and level,
 /// each writing only its own field and scratch.
-void Merger::Pass::carrying_fields(std::span<const bool> carries) {
+void Merger::Pass::carrying_fields(std::span<const bool> carries,
+                                   std::span<const std::uint8_t> reads_level) {
   const std::size_t levels = level_count - 1;
   if (levels == 0) return;  // a hierarchy of one level: the vertices' own rotations
   if (ws.carrying.size() < std::size_t{users} * detail::kCarryLevels)
@@ -1118,7 +1116,8 @@ void Merger::Pass::carrying_fields(std::span<const bool> carries) {
   const std::size_t tasks = count * levels;
   if (ws.carrying_scratch.size() < tasks) ws.carrying_scratch.resize(tasks);
   ws.pool.run(tasks, [&](std::size_t task) {
-    carrying_rotations(carrier[task / levels], task % levels + 1, ws.carrying_scratch[task]);
+    carrying_rotations(carrier[task / levels], task % levels + 1, reads_level,
+                       ws.carrying_scratch[task]);
   });
   for (std::size_t k = 0; k < count; ++k) {
     detail::TransportInput& in = ws.transport_inputs[carrier[k]];
@@ -1129,11 +1128,13 @@ void Merger::Pass::carrying_fields(std::span<const bool> carries) {
 }
 
 /// Diff u's rotations averaged over level `top` (decompose()) and interpolated back down the
-/// parent links to the vertices where it may carry another diff (it rotates them, another
-/// moves them): a node's value is the weighted average of its parents' offsets from the
-/// identity, normalised (absent parents are the identity).
+/// parent links to the vertices it rotates that read that level (the last level also serves
+/// the levels past the hierarchy): a node's value is the weighted average of its parents'
+/// offsets from the identity, normalised (absent parents are the identity).
 void Merger::Pass::carrying_rotations(std::size_t u, std::size_t top,
+                                      std::span<const std::uint8_t> reads_level,
                                       std::vector<std::vector<Quat>>& scratch) {
+  const std::uint32_t reads = top + 1 < level_count ? 1u << top : ~0u << top;
   const SparsePyramid<DualQuat>& pyramid = ws.dq_users[u];
   std::vector<Quat>& out = ws.carrying[u * detail::kCarryLevels + top];
   if (out.size() < vertex_count) out.resize(vertex_count);
@@ -1147,7 +1148,7 @@ void Merger::Pass::carrying_rotations(std::size_t u, std::size_t top,
     const Quat* above = l + 1 < top ? scratch[l + 1].data() : nullptr;
     Quat* here = l == 0 ? out.data() : scratch[l].data();
     for (const std::uint32_t c : pyramid.levels[l].list) {
-      if (l == 0 && !moved_by_another(u, c)) continue;
+      if (l == 0 && (reads_level[c] & reads) == 0) continue;
       const ParentLinks::Level::Row row = fine.row(c);
       float w = 0, x = 0, y = 0, z = 0, total = 0;
       for (std::uint32_t k = 0; k < row.count; ++k) {
