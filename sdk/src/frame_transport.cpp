@@ -64,6 +64,7 @@ class Transport {
   void share_rotations(std::uint32_t groups);
   void load(std::size_t at, VertexState& s) const;
   Quat rotation(std::size_t at, std::size_t i) const;
+  Vec3d face_cross(std::uint32_t f) const;
   Vec3d base_normal(std::uint32_t v) const;
   double edge_length(std::uint32_t v) const;
   Quat carrier(std::size_t at, std::size_t i, double level) const;
@@ -163,15 +164,20 @@ Quat Transport::rotation(std::size_t at, std::size_t i) const {
   return has(users_[i].rotated, v) ? users_[i].isometry[v].real : Quat{};
 }
 
+/// Base face f's area vector, doubled: its normal times twice its area.
+Vec3d Transport::face_cross(std::uint32_t f) const {
+  const Triangle& t = topology_.triangles[f];
+  const Vec3d p0 = widen(base_[t[0]]);
+  return cross(sub(widen(base_[t[1]]), p0), sub(widen(base_[t[2]]), p0));
+}
+
 /// The mean edge length around v, from the area of its base faces (equilateral triangles of
 /// that area); 0 when it has none.
 double Transport::edge_length(std::uint32_t v) const {
   double area = 0;
   std::size_t faces = 0;
   for (std::uint32_t f : topology_.vertex_faces.row(v)) {
-    const Triangle& t = topology_.triangles[f];
-    const Vec3d p0 = widen(base_[t[0]]);
-    area += std::sqrt(norm2(cross(sub(widen(base_[t[1]]), p0), sub(widen(base_[t[2]]), p0)))) / 2;
+    area += std::sqrt(norm2(face_cross(f))) / 2;
     ++faces;
   }
   return faces ? std::sqrt(4 / std::sqrt(3.0) * area / static_cast<double>(faces)) : 0.0;
@@ -224,11 +230,7 @@ Quat Transport::carrier(std::size_t at, std::size_t i, double level) const {
 /// The unit area-weighted normal of v's base faces (zero when it has none).
 Vec3d Transport::base_normal(std::uint32_t v) const {
   Vec3d sum{};
-  for (std::uint32_t f : topology_.vertex_faces.row(v)) {
-    const Triangle& t = topology_.triangles[f];
-    const Vec3d p0 = widen(base_[t[0]]);
-    sum = add(sum, cross(sub(widen(base_[t[1]]), p0), sub(widen(base_[t[2]]), p0)));
-  }
+  for (std::uint32_t f : topology_.vertex_faces.row(v)) sum = add(sum, face_cross(f));
   const double len = std::sqrt(norm2(sum));
   return len > 0 ? scale(sum, 1.0 / len) : Vec3d{};
 }
@@ -309,8 +311,8 @@ void Transport::finish_weights(std::size_t chunks) {
 /// Identical edits are one intent (the same edit merged twice, what two branches of a
 /// session share); two artists pushing the same way by similar amounts are two. Wherever a
 /// sameness band lies, the merged displacement dips there, so it is kept to float rounding:
-/// two inflates along one normal, whose heights cross, creased the surface along the band
-/// where they were within a tenth of each other (sessions rebase such overlaps every sync).
+/// two inflates along one normal whose heights cross would otherwise groove the surface along
+/// the band where they are close (sessions rebase such overlaps every sync).
 constexpr double kSameTolerance = 0.001;
 
 /// s_ij: 1 for the same displacement, 0 for unrelated ones (or either zero). Measured against
