@@ -11,35 +11,49 @@ namespace {
 
 constexpr std::uint32_t kNone = 0xffffffffu;
 
-/// What a phase of the repair draws the folded region toward.
-enum class Target {
-  /// Plain addition of the displacements there: the frames that carried one artist's detail
-  /// into another's edit are undone, the detail and the edit both stay (a detail closed on
-  /// itself by a strong bend opens again).
+/// What a phase of the repair does to the folded region.
+enum class Remedy {
+  /// Pull toward plain addition of the displacements there: the frames that carried one
+  /// artist's detail into another's edit are undone, the detail and the edit both stay (a
+  /// detail closed on itself by a strong bend opens again).
   addition,
-  /// The edit that moves the region most, alone: what the other artists added gives way. It
-  /// folds nothing there that is not that artist's own, so it ends any fold addition keeps
-  /// (a grab dragged across another artist's smoothing).
+  /// Smooth the displacement field: each vertex's displacement moves toward its neighbours'
+  /// mean. A fold is a displacement that changes faster than the faces under it are wide;
+  /// smoothing ends it without choosing between the artists and, unlike a pull toward another
+  /// shape, leaves no step where the pull fades (pulls creased sessions where strokes meet).
+  relax,
+  /// Pull toward the edit that moves the region most, alone: what the other artists added
+  /// gives way. It folds nothing there that is not that artist's own, so it ends the folds
+  /// left on faces the base already made slivers (a stretched base flips at any mix).
   dominant,
 };
 
-/// One phase: the pull reaches full strength at the seeds after `full_at` attempts and fades
-/// linearly over `rings` rings of neighbours; each attempt also seeds the faces still folded.
+/// One phase: the remedy reaches full strength at the seeds after `full_at` attempts and
+/// fades over `rings` rings of neighbours; each attempt also seeds the faces still folded.
 struct Phase {
-  Target target;
+  Remedy remedy;
   std::uint32_t rings;
   int full_at;
   int attempts;
 };
 
-/// Gentle first (one ring, eighths), then wider and firmer, for as long as folds remain (48
-/// attempts: 16 left folds in a four-artist demo session, 48 did not). Measured on the Blender
-/// cases, the first phase ends the folds of a strong detail on a bend at half of addition's error
-/// there, the second those of overlapping grabs and smoothing. The second fades over six rings:
-/// where two strong brushes cross, what gives way is a displacement many edges long, and
-/// removing it over two rings folded the band's own edge (a four-artist session's merge: 162
-/// folds left by the first phase, 401 after a two-ring second phase, none after six rings).
-constexpr Phase kPhases[] = {{Target::addition, 1, 8, 12}, {Target::dominant, 6, 4, 48}};
+/// Gentle first (one ring, eighths), then smoothing, then the dominant edit for whatever is
+/// left, each for as long as folds remain. Measured on the Blender cases, the first phase ends
+/// the folds of a strong detail on a bend at half of addition's error there. Smoothing over
+/// three rings ends most of the rest: in sessions that rebase runs of strokes (the crease test
+/// of test_merge_fidelity.cpp, sixteen seeds) it took `full` from 2x addition's creases to
+/// 0.9x; two rings left more folds to the last phase (1.1x), five smoothed across neighbouring
+/// strokes (0.94x). The last phase fades over six rings: where two strong brushes cross, what
+/// gives way is a displacement many edges long, and removing it over two rings folded the
+/// band's own edge (a four-artist session's merge: 401 folds left, none over six rings).
+constexpr Phase kPhases[] = {{Remedy::addition, 1, 8, 12},
+                             {Remedy::relax, 3, 1, 48},
+                             {Remedy::dominant, 6, 4, 48}};
+
+/// Each relax attempt: two Jacobi sweeps moving a seed's displacement halfway to its
+/// neighbours' mean (a fraction that never overshoots, whatever the valence).
+constexpr int kRelaxSweeps = 2;
+constexpr double kRelaxRate = 0.5;
 
 struct Repair {
   const Topology& topology;
@@ -168,24 +182,57 @@ struct Repair {
     }
   }
 
-  Vec3d target_position(Target target, std::uint32_t i) const {
+  Vec3d target_position(Remedy remedy, std::uint32_t i) const {
     const std::uint32_t v = vertices[i];
-    if (target == Target::dominant) return position_after(base, *diffs[s.dominant[s.part[i]]], v);
+    if (remedy == Remedy::dominant) return position_after(base, *diffs[s.dominant[s.part[i]]], v);
     const Vec3d b = widen(base[v]);
     Vec3d p = b;
     for (const Diff* d : diffs) p = add(p, sub(position_after(base, *d, v), b));
     return p;
   }
 
-  /// Moves the region from where the phase started toward `target`: by `strength` at the
+  /// Moves the region from where the phase started toward its target: by `strength` at the
   /// seeds, fading linearly to nothing one ring past the region.
   void pull(const Phase& phase, double strength) {
     for (std::uint32_t i : s.region) {
       const double fade = double(phase.rings + 1 - s.ring[i]) / double(phase.rings + 1);
       const Vec3d from = widen(s.start[i]);
       const Vec3d p =
-          add(from, scale(sub(target_position(phase.target, i), from), strength * fade));
+          add(from, scale(sub(target_position(phase.remedy, i), from), strength * fade));
       moved[i] = {float(p.x), float(p.y), float(p.z)};
+    }
+  }
+
+  Vec3d displacement(std::uint32_t v) const { return sub(position(v), widen(base[v])); }
+
+  /// The mean displacement of `v`'s neighbours (an unmoved one counts as zero), or `v`'s own
+  /// when it has none.
+  Vec3d neighbours_mean(std::uint32_t v) const {
+    const auto row = topology.vertex_vertices.row(v);
+    if (row.empty()) return displacement(v);
+    Vec3d mean{0, 0, 0};
+    for (std::uint32_t u : row) mean = add(mean, displacement(u));
+    return scale(mean, 1.0 / double(row.size()));
+  }
+
+  /// Jacobi sweeps of displacement smoothing over the region, by kRelaxRate at the seeds,
+  /// fading smoothly (zero slope at both ends, so the edge of the region leaves no kink) to
+  /// nothing one ring past it.
+  void relax(const Phase& phase) {
+    s.relaxed.resize(s.region.size());
+    for (int sweep = 0; sweep < kRelaxSweeps; ++sweep) {
+      for (std::size_t r = 0; r < s.region.size(); ++r) {
+        const std::uint32_t i = s.region[r];
+        const double x = double(phase.rings + 1 - s.ring[i]) / double(phase.rings + 1);
+        const double fade = x * x * (3 - 2 * x);
+        const Vec3d d = displacement(vertices[i]);
+        s.relaxed[r] = add(d, scale(sub(neighbours_mean(vertices[i]), d), kRelaxRate * fade));
+      }
+      for (std::size_t r = 0; r < s.region.size(); ++r) {
+        const std::uint32_t i = s.region[r];
+        const Vec3d p = add(widen(base[vertices[i]]), s.relaxed[r]);
+        moved[i] = {float(p.x), float(p.y), float(p.z)};
+      }
     }
   }
 
@@ -194,8 +241,12 @@ struct Repair {
     for (int attempt = 0; attempt < phase.attempts && !s.folds.empty(); ++attempt) {
       seed_folded_faces();
       grow_region(phase.rings);
-      if (phase.target == Target::dominant) choose_dominant_diffs();
-      pull(phase, std::min(1.0, double(attempt + 1) / phase.full_at));
+      if (phase.remedy == Remedy::relax) {
+        relax(phase);
+      } else {
+        if (phase.remedy == Remedy::dominant) choose_dominant_diffs();
+        pull(phase, std::min(1.0, double(attempt + 1) / phase.full_at));
+      }
       collect_region_folds();
     }
   }

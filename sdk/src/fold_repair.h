@@ -5,10 +5,11 @@
 // on a detail) the combination can turn faces inside out although no artist's own edit did: a
 // visible crease or spike (folds.h has the definition every count uses). Such a face is
 // repaired where it appears: around its vertices the merged positions are drawn toward plain
-// addition of the edits there (the frames that carried one edit into another undone), then,
-// where that still folds, toward the edit that moves the region most; fully at the fold and
-// less with each ring of neighbours, more strongly on each attempt and over the neighbours of
-// any face still folded. It is local (a few rings around the faces), leaves every vertex away
+// addition of the edits there (the frames that carried one edit into another undone); where
+// that still folds, the displacement field is smoothed; where even that folds (faces the base
+// already made slivers), the region is drawn toward the edit that moves it most. Each acts
+// fully at the fold and less with each ring of neighbours, more strongly on each attempt and
+// over the neighbours of any face still folded. It is local (a few rings around the faces), leaves every vertex away
 // from them bit-identical, and runs in the canonical order of the merge (so peers agree
 // bitwise).
 // Where nothing folds it costs one face test around each moved vertex and allocates nothing.
@@ -21,6 +22,7 @@
 #include "csculpt/diff.h"
 #include "csculpt/hierarchy.h"
 #include "csculpt/mesh.h"
+#include "csculpt/vec3.h"
 #include "worker_pool.h"
 
 namespace csculpt::detail {
@@ -37,6 +39,7 @@ struct FoldRepairScratch {
   std::vector<double> energy;           ///< per diff: squared displacement over one part
   std::vector<std::uint32_t> region, frontier, next;
   std::vector<Vec3f> start;  ///< per moved vertex: its position when the current phase began
+  std::vector<Vec3d> relaxed;  ///< per region vertex: its smoothed displacement in a sweep
 };
 
 /// Repairs the new folds of the positions `moved` (one per vertex of `vertices`, increasing;

@@ -336,9 +336,10 @@ TEST(MergeFidelity, EditsOfOneScaleAddInsteadOfCreasingEachOther) {
 // detail beside it was sheared into creases, and so was a groove wherever two inflates along
 // one normal were within a tenth of each other: over these eight sessions `full` ended with 5x
 // addition's creases (20,055 against 4,019). With the carrying rotation read at the scale of
-// the displacement it carries and sameness kept to float rounding, 2.1x (at addition's level
-// on four of the eight, 3x on the others: what remains is in docs/merge-quality.md); the test
-// holds it under 2.5x.
+// the displacement it carries and sameness kept to float rounding, 2.1x; the fold repair then
+// pulled whole regions toward one artist's edit where strokes met and creased the pull's edge,
+// and smoothing the displacement there instead brought it to 0.84x (3,390; on seeds 9-16
+// 0.92x). The test holds `full` within addition's count plus a tenth.
 TEST(MergeFidelity, RunsOfStrokesAtMixedScalesRebaseWithoutCreasing) {
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
   GTEST_SKIP() << "minutes under the sanitizers at the size where creases appear";
@@ -346,7 +347,7 @@ TEST(MergeFidelity, RunsOfStrokesAtMixedScalesRebaseWithoutCreasing) {
   const std::uint64_t seeds[] = {1, 2, 3, 4, 5, 6, 7, 8};
   const auto [full, sum] = lockstep_creases(seeds, 7919, 120, 4);
   std::printf("runs of 4, eight sessions: opposed face pairs full %u, sum %u\n", full, sum);
-  EXPECT_LE(full, sum * 5 / 2);
+  EXPECT_LE(full, sum + sum / 10);
 }
 
 }  // namespace
