@@ -60,6 +60,7 @@ struct Repair {
   std::span<const Vec3f> base;
   std::span<const std::uint32_t> vertices;
   std::span<const Diff* const> diffs;
+  std::span<const std::uint32_t> seam_of;
   std::span<Vec3f> moved;
   FoldRepairScratch& s;
 
@@ -126,24 +127,83 @@ struct Repair {
     s.region.clear();
     s.frontier.clear();
     for (std::uint32_t i = 0; i < s.seed.size(); ++i)
-      if (s.seed[i]) {
-        s.ring[i] = 0;
-        s.frontier.push_back(i);
-        s.region.push_back(i);
-      }
+      if (s.seed[i]) reach(i, 0, s.frontier);
     for (std::uint32_t r = 1; r <= rings; ++r) {
       s.next.clear();
       for (std::uint32_t i : s.frontier)
         for (std::uint32_t u : topology.vertex_vertices.row(vertices[i])) {
           const std::uint32_t j = s.slot[u];
-          if (j == kNone || s.ring[j] != kNone) continue;
-          s.ring[j] = r;
-          s.next.push_back(j);
-          s.region.push_back(j);
+          if (j != kNone) reach(j, r, s.next);
         }
       std::swap(s.frontier, s.next);
     }
     std::sort(s.region.begin(), s.region.end());
+  }
+
+  /// Adds vertex `i` of the list to the region at ring `r` (if it is not in it), with the
+  /// other members of its closed seam group: the copies of a seam vertex are repaired alike.
+  void reach(std::uint32_t i, std::uint32_t r, std::vector<std::uint32_t>& out) {
+    if (s.ring[i] != kNone) return;
+    const std::uint32_t g = closed_group(i);
+    if (g == kNone) {
+      s.ring[i] = r;
+      out.push_back(i);
+      s.region.push_back(i);
+      return;
+    }
+    for (std::uint32_t k = s.seam_first[g]; k < s.seam_first[g + 1]; ++k) {
+      const std::uint32_t j = s.seam_members[k];
+      if (s.ring[j] != kNone) continue;
+      s.ring[j] = r;
+      out.push_back(j);
+      s.region.push_back(j);
+    }
+  }
+
+  std::uint32_t closed_group(std::uint32_t i) const {
+    if (seam_of.empty() || seam_of[i] == kNone) return kNone;
+    return s.seam_closed[seam_of[i]] ? seam_of[i] : kNone;
+  }
+
+  /// Lists each seam group's members (counting sort by group) and marks the groups the merge
+  /// left closed: every member at one position.
+  void group_seams() {
+    s.seam_first.clear();
+    s.seam_members.clear();
+    s.seam_closed.clear();
+    if (seam_of.empty()) return;
+    std::uint32_t groups = 0;
+    for (std::uint32_t g : seam_of)
+      if (g != kNone) groups = std::max(groups, g + 1);
+    s.seam_first.assign(groups + 1, 0);
+    for (std::uint32_t g : seam_of)
+      if (g != kNone) ++s.seam_first[g + 1];
+    for (std::uint32_t g = 0; g < groups; ++g) s.seam_first[g + 1] += s.seam_first[g];
+    s.seam_members.resize(s.seam_first[groups]);
+    s.next.assign(s.seam_first.begin(), s.seam_first.end() - 1);  // the fill cursor per group
+    for (std::uint32_t i = 0; i < seam_of.size(); ++i)
+      if (seam_of[i] != kNone) s.seam_members[s.next[seam_of[i]]++] = i;
+    s.seam_closed.assign(groups, 1);
+    for (std::uint32_t g = 0; g < groups; ++g)
+      for (std::uint32_t k = s.seam_first[g] + 1; k < s.seam_first[g + 1]; ++k)
+        if (!(moved[s.seam_members[k]] == moved[s.seam_members[s.seam_first[g]]]))
+          s.seam_closed[g] = 0;
+  }
+
+  /// Puts every closed seam group in the region back at one position, its members' mean (in
+  /// list order): each copy was repaired with its own side's neighbours.
+  void weld_seams() {
+    if (s.seam_closed.empty()) return;
+    for (std::uint32_t i : s.region) {
+      const std::uint32_t g = closed_group(i);
+      if (g == kNone || s.seam_members[s.seam_first[g]] != i) continue;
+      Vec3d mean{0, 0, 0};
+      for (std::uint32_t k = s.seam_first[g]; k < s.seam_first[g + 1]; ++k)
+        mean = add(mean, widen(moved[s.seam_members[k]]));
+      mean = scale(mean, 1.0 / double(s.seam_first[g + 1] - s.seam_first[g]));
+      for (std::uint32_t k = s.seam_first[g]; k < s.seam_first[g + 1]; ++k)
+        moved[s.seam_members[k]] = {float(mean.x), float(mean.y), float(mean.z)};
+    }
   }
 
   /// Splits the region into connected parts (`s.part`; numbered in the order of their lowest
@@ -233,6 +293,7 @@ struct Repair {
         const Vec3d p = add(widen(base[vertices[i]]), s.relaxed[r]);
         moved[i] = {float(p.x), float(p.y), float(p.z)};
       }
+      weld_seams();
     }
   }
 
@@ -246,6 +307,7 @@ struct Repair {
       } else {
         if (phase.remedy == Remedy::dominant) choose_dominant_diffs();
         pull(phase, std::min(1.0, double(attempt + 1) / phase.full_at));
+        weld_seams();
       }
       collect_region_folds();
     }
@@ -257,6 +319,7 @@ struct Repair {
     s.ring.assign(n, kNone);
     s.part.assign(n, kNone);
     s.region.clear();
+    group_seams();
   }
 };
 
@@ -264,12 +327,13 @@ struct Repair {
 
 std::uint32_t repair_new_folds(const Topology& topology, std::span<const Vec3f> base,
                                std::span<const std::uint32_t> vertices,
-                               std::span<const Diff* const> diffs, std::span<Vec3f> moved,
+                               std::span<const Diff* const> diffs,
+                               std::span<const std::uint32_t> seam_of, std::span<Vec3f> moved,
                                FoldRepairScratch& scratch, WorkerPool& pool, std::size_t grain) {
   if (scratch.slot.size() != topology.vertex_count)
     scratch.slot.assign(topology.vertex_count, kNone);
   for (std::uint32_t i = 0; i < vertices.size(); ++i) scratch.slot[vertices[i]] = i;
-  Repair r{topology, base, vertices, diffs, moved, scratch};
+  Repair r{topology, base, vertices, diffs, seam_of, moved, scratch};
   r.collect_all_folds(pool, grain);
   const auto found = static_cast<std::uint32_t>(scratch.folds.size());
   if (found > 0) {

@@ -40,15 +40,21 @@ struct FoldRepairScratch {
   std::vector<std::uint32_t> region, frontier, next;
   std::vector<Vec3f> start;  ///< per moved vertex: its position when the current phase began
   std::vector<Vec3d> relaxed;  ///< per region vertex: its smoothed displacement in a sweep
+  std::vector<std::uint32_t> seam_first;  ///< per seam group: where its members start in
+  std::vector<std::uint32_t> seam_members;  ///< ... this list of moved vertices, by group
+  std::vector<std::uint8_t> seam_closed;    ///< per seam group: all members at one position
 };
 
 /// Repairs the new folds of the positions `moved` (one per vertex of `vertices`, increasing;
-/// every other vertex at its base position) in place. `diffs` are the merge's inputs. Returns
+/// every other vertex at its base position) in place. `diffs` are the merge's inputs.
+/// `seam_of` (empty, or one per vertex of the list) numbers the groups of vertices at one base
+/// position (split seams; kNone when alone): a group the merge left closed stays closed. Returns
 /// the number of new folds found before the repair. The search for them runs over `pool` in
 /// chunks of `grain`; the repair itself, rare and local, on the calling thread.
 std::uint32_t repair_new_folds(const Topology& topology, std::span<const Vec3f> base,
                                std::span<const std::uint32_t> vertices,
-                               std::span<const Diff* const> diffs, std::span<Vec3f> moved,
+                               std::span<const Diff* const> diffs,
+                               std::span<const std::uint32_t> seam_of, std::span<Vec3f> moved,
                                FoldRepairScratch& scratch, WorkerPool& pool, std::size_t grain);
 
 }  // namespace csculpt::detail

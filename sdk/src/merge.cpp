@@ -1172,8 +1172,8 @@ void Merger::Pass::repair_folds(std::span<const std::uint32_t> changed, std::spa
   std::array<const Diff*, max_merge_diffs> ordered{};
   for (std::uint32_t u = 0; u < users; ++u) ordered[u] = diffs[order[u]];
   timings.new_folds_repaired += detail::repair_new_folds(
-      hierarchy.topology(), base.positions, changed, std::span(ordered.data(), users), moved,
-      ws.fold_repair, ws.pool, kBlendGrain);
+      hierarchy.topology(), base.positions, changed, std::span(ordered.data(), users),
+      ws.transport.seam_of, moved, ws.fold_repair, ws.pool, kBlendGrain);
   timings.fold_repair_ms += ms_since(t0);
 }
 

@@ -82,7 +82,7 @@ TEST(FoldRepair, UnfoldsWhatNoDiffFoldedAndStaysLocal) {
   detail::FoldRepairScratch scratch;
   detail::WorkerPool pool(2);
   const std::uint32_t found = detail::repair_new_folds(topology, base.positions, vertices,
-                                                       std::span(diffs), moved, scratch, pool, 4);
+                                                       std::span(diffs), {}, moved, scratch, pool, 4);
   EXPECT_EQ(found, folds_before);
   for (std::size_t i = 0; i < vertices.size(); ++i) {
     float* out = merged.positions.values.data() + 3 * i;
@@ -111,7 +111,7 @@ TEST(FoldRepair, UnfoldsWhatNoDiffFoldedAndStaysLocal) {
 
   // The scratch is clean for the next call: the same call again gives the same result.
   std::vector<Vec3f> again = before;
-  detail::repair_new_folds(topology, base.positions, vertices, std::span(diffs), again, scratch,
+  detail::repair_new_folds(topology, base.positions, vertices, std::span(diffs), {}, again, scratch,
                            pool, 4);
   EXPECT_EQ(again, moved);
 }
@@ -127,8 +127,8 @@ TEST(FoldRepair, NothingFoldedLeavesEveryPositionBitIdentical) {
   const std::vector<Vec3f> before = moved;
   detail::FoldRepairScratch scratch;
   detail::WorkerPool pool(1);
-  EXPECT_EQ(detail::repair_new_folds(topology, base.positions, vertices, std::span(diffs), moved,
-                                     scratch, pool, 4),
+  EXPECT_EQ(detail::repair_new_folds(topology, base.positions, vertices, std::span(diffs), {},
+                                     moved, scratch, pool, 4),
             0u);
   EXPECT_EQ(moved, before);
 }
@@ -178,6 +178,57 @@ TEST(FoldRepair, LongScriptedSessionsOfFourArtistsMergeWithoutNewFolds) {
           << "seed " << seed << ", " << strokes << " strokes per artist";
     }
   }
+}
+
+
+/// The grid with its middle column split: the cells right of it use copies of the column's
+/// vertices (coincident, unconnected, as a UV seam leaves them). `twins` gets the pairs.
+Mesh split_grid(std::uint32_t n, std::vector<std::pair<std::uint32_t, std::uint32_t>>& twins) {
+  Mesh m = grid(n);
+  const std::uint32_t seam = n / 2;
+  std::vector<std::uint32_t> copy(m.vertex_count(), 0);
+  for (std::uint32_t y = 0; y < n; ++y) {
+    const std::uint32_t v = y * n + seam;
+    copy[v] = static_cast<std::uint32_t>(m.positions.size());
+    m.positions.push_back(m.positions[v]);
+    twins.push_back({v, copy[v]});
+  }
+  for (Triangle& t : m.triangles) {
+    float x = 0;
+    for (std::uint32_t v : t) x += m.positions[v].x;
+    if (x / 3 > float(seam))
+      for (std::uint32_t& v : t)
+        if (v < n * n && v % n == seam) v = copy[v];
+  }
+  return m;
+}
+
+// Two artists each push the same seam vertex, both of its copies together, along the seam:
+// together they fold faces on both sides, and the repair, smoothing each side with its own
+// neighbours, must still leave the copies together (no crack), as the artists left them.
+TEST(FoldRepair, ASplitSeamMovedTogetherStaysClosedThroughTheRepair) {
+  const std::uint32_t n = 25;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> twins;
+  const Mesh base = split_grid(n, twins);
+  const Hierarchy h = Hierarchy::build(base);
+  const auto [c, twin] = twins[n / 2];
+  auto pushed = [&](Vec3f by) {
+    Mesh e = base;
+    for (std::uint32_t v : {c, twin}) e.positions[v] = add(e.positions[v], by);
+    // a soft shoulder on the left side only, so the two sides' neighbourhoods differ
+    e.positions[c - 1] = add(e.positions[c - 1], scale(by, 0.5f));
+    return capture_diff(base, e);
+  };
+  const Diff diffs[] = {pushed({0.f, 0.6f, 0.f}), pushed({0.f, 0.6f, 0.05f})};
+  Merger merger(h);
+  const Diff merged = merger.merge(base, diffs, MergeMethod::full);
+  EXPECT_GT(merger.last_timings().new_folds_repaired, 0u) << "the merge folded nothing to repair";
+  const Diff* inputs[] = {&diffs[0], &diffs[1]};
+  EXPECT_EQ(count_new_folds(base, inputs, merged), 0u);
+  Mesh result = base;
+  apply_diff(merged, result);
+  for (const auto& [v, w] : twins) EXPECT_EQ(result.positions[v], result.positions[w]) << v;
+  EXPECT_GT(result.positions[c].y - base.positions[c].y, 0.3f);
 }
 
 }  // namespace
