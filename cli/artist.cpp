@@ -41,6 +41,7 @@ bool SimulatedArtist::stroke() {
     for (const ChannelDesc& d : material_channels())
       if (local_.find_channel(d.name) < 0) return false;
   apply_stroke(local_, s, &topology_, &changed_);
+  ++generation_;
   ++strokes_;
   ++unsent_strokes_;
   return true;
@@ -71,12 +72,16 @@ std::size_t SimulatedArtist::step(peer::Clock::time_point now, bool editing) {
 
 std::size_t SimulatedArtist::update() {
   // changed_ holds what the strokes wrote since the last submit: just what update() asks for.
-  return options_.whole_mesh_submit ? session_.update(local_) : session_.update(local_, changed_);
+  const std::size_t applied =
+      options_.whole_mesh_submit ? session_.update(local_) : session_.update(local_, changed_);
+  if (applied > 0) ++generation_;
+  return applied;
 }
 
 bool SimulatedArtist::submit(std::uint32_t strokes) {
   const bool sent = options_.whole_mesh_submit ? session_.submit(local_, strokes)
                                                : session_.submit(local_, strokes, changed_);
+  if (sent) ++generation_;  // a submit sets the sent values to what the peers receive
   changed_.clear();  // listed once: the session keeps what differs from its base
   return sent;
 }

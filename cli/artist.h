@@ -49,7 +49,10 @@ class SimulatedArtist {
   std::size_t update();
   /// The host changed `vertex` of local() outside the artist's strokes (a marker): listed
   /// with the next submit and update like the strokes' vertices, or neither would find it.
-  void changed(std::uint32_t vertex) { changed_.push_back(vertex); }
+  void changed(std::uint32_t vertex) {
+    changed_.push_back(vertex);
+    ++generation_;
+  }
 
   /// Submits the edit (the changed vertices, or the whole mesh; see ArtistOptions) with
   /// `strokes`; what Session::submit returns.
@@ -60,6 +63,9 @@ class SimulatedArtist {
 
   Mesh& local() { return local_; }
   std::uint32_t strokes() const { return strokes_; }
+  /// Grows whenever local() or the session's base may have changed through the artist (a
+  /// stroke, a marker, versions taken in): what is derived from them is recomputed only then.
+  std::uint64_t generation() const { return generation_; }
   /// Strokes made but not yet seen inside a merged version.
   std::uint64_t unacknowledged() const;
 
@@ -71,6 +77,7 @@ class SimulatedArtist {
   std::vector<Stroke> script_;
   std::vector<std::uint32_t> changed_;  ///< vertices the strokes wrote since the last submit
   std::uint32_t strokes_ = 0, unsent_strokes_ = 0;
+  std::uint64_t generation_ = 0;
   std::size_t cursor_ = 0;  ///< next stroke of the script
   peer::Clock::time_point started_{}, next_submit_{};
   bool started_flag_ = false;

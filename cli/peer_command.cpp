@@ -217,7 +217,34 @@ std::unique_ptr<peer::Session> open_session(const PeerCommandOptions& o,
   return session;
 }
 
-void print_event(const peer::Event& e, peer::PeerId self, SimulatedArtist& artist) {
+/// The digests of the artist's mesh and the session's base, hashed again only when the artist's
+/// generation or the version moved, and at least every kRefresh in case something changed them
+/// otherwise: hashing both meshes on every 3 ms turn took most of a core per peer process, and
+/// the peers share the machine with the hosts they test.
+class Digests {
+ public:
+  void refresh(const peer::Session& session, SimulatedArtist& artist) {
+    const auto now = peer::Clock::now();
+    if (artist.generation() == generation_ && session.version() == version_ &&
+        now - at_ < kRefresh)
+      return;
+    generation_ = artist.generation();
+    version_ = session.version();
+    at_ = now;
+    local_ = peer::mesh_digest(artist.local());
+    base_ = peer::mesh_digest(session.base());
+  }
+  std::uint64_t local() const { return local_; }
+  std::uint64_t base() const { return base_; }
+
+ private:
+  static constexpr std::chrono::milliseconds kRefresh{250};
+  std::uint64_t generation_ = ~std::uint64_t{0}, version_ = ~std::uint64_t{0};
+  peer::Clock::time_point at_{};
+  std::uint64_t local_ = 0, base_ = 0;
+};
+
+void print_event(const peer::Event& e, peer::PeerId self, std::uint64_t local_digest) {
   Line line(kind_name(e.kind));
   line.num("id", self).raw("t", now_ms());
   switch (e.kind) {
@@ -225,7 +252,7 @@ void print_event(const peer::Event& e, peer::PeerId self, SimulatedArtist& artis
       line.num("version", e.version)
           .num("merger", e.peer)
           .num("epoch", e.epoch)
-          .raw("digest", hex64(peer::mesh_digest(artist.local())));
+          .raw("digest", hex64(local_digest));
       break;
     case peer::EventKind::merger_changed:
       line.num("merger", e.peer).num("epoch", e.epoch).num("version", e.version);
@@ -241,12 +268,13 @@ void print_event(const peer::Event& e, peer::PeerId self, SimulatedArtist& artis
 }
 
 State read_state(const peer::Session& session, SimulatedArtist& artist, bool editing,
-                 const MarkerPainter* markers) {
+                 const MarkerPainter* markers, Digests& digests) {
   const peer::SessionStats st = session.stats();
   State s;
   s.version = session.version();
-  s.digest = peer::mesh_digest(artist.local());
-  s.base_digest = peer::mesh_digest(session.base());
+  digests.refresh(session, artist);
+  s.digest = digests.local();
+  s.base_digest = digests.base();
   s.strokes = artist.strokes();
   s.unacknowledged = artist.unacknowledged();
   s.acknowledged = st.strokes_acknowledged;
@@ -312,6 +340,7 @@ void edit_and_sync(const PeerCommandOptions& o, peer::Session& session, Simulate
                                          std::chrono::duration<double>(o.linger));
   const peer::PeerId self = session.id();
   State last;
+  Digests digests;
   bool first_state = true;
   while (true) {
     const auto now = peer::Clock::now();
@@ -319,8 +348,11 @@ void edit_and_sync(const PeerCommandOptions& o, peer::Session& session, Simulate
     const bool editing = !quit && !input.editing_stopped() && now < edit_end;
     artist.step(now, editing);
     if (markers) mark(session, artist, *markers);
-    for (const peer::Event& e : session.poll_events()) print_event(e, self, artist);
-    const State s = read_state(session, artist, editing, markers);
+    for (const peer::Event& e : session.poll_events()) {
+      digests.refresh(session, artist);
+      print_event(e, self, digests.local());
+    }
+    const State s = read_state(session, artist, editing, markers, digests);
     if (first_state || !(s == last)) {
       first_state = false;
       last = s;
