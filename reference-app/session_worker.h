@@ -35,6 +35,8 @@ struct MeshArrays {
   uint32_t vertex_count() const { return static_cast<uint32_t>(positions.size() / 3); }
   void read(uint32_t v, float* out) const;
   void write(uint32_t v, const float* in);
+  /** Appends the vertices whose values differ bitwise from `other`'s (same layout), increasing. */
+  void differing_vertices(const MeshArrays& other, std::vector<uint32_t>& out) const;
   /** The arrays of `mesh` (a csc_mesh), with its channels' ranges. */
   static MeshArrays of(const csc_mesh* mesh);
 
