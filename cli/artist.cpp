@@ -82,7 +82,7 @@ bool SimulatedArtist::submit(std::uint32_t strokes) {
   const bool sent = options_.whole_mesh_submit ? session_.submit(local_, strokes)
                                                : session_.submit(local_, strokes, changed_);
   if (sent) ++generation_;  // a submit sets the sent values to what the peers receive
-  changed_.clear();  // listed once: the session keeps what differs from its base
+  changed_.clear();         // listed once: the session keeps what differs from its base
   return sent;
 }
 

@@ -225,8 +225,7 @@ class Digests {
  public:
   void refresh(const peer::Session& session, SimulatedArtist& artist) {
     const auto now = peer::Clock::now();
-    if (artist.generation() == generation_ && session.version() == version_ &&
-        now - at_ < kRefresh)
+    if (artist.generation() == generation_ && session.version() == version_ && now - at_ < kRefresh)
       return;
     generation_ = artist.generation();
     version_ = session.version();

@@ -46,9 +46,8 @@ struct Phase {
 /// strokes (0.94x). The last phase fades over six rings: where two strong brushes cross, what
 /// gives way is a displacement many edges long, and removing it over two rings folded the
 /// band's own edge (a four-artist session's merge: 401 folds left, none over six rings).
-constexpr Phase kPhases[] = {{Remedy::addition, 1, 8, 12},
-                             {Remedy::relax, 3, 1, 48},
-                             {Remedy::dominant, 6, 4, 48}};
+constexpr Phase kPhases[] = {
+    {Remedy::addition, 1, 8, 12}, {Remedy::relax, 3, 1, 48}, {Remedy::dominant, 6, 4, 48}};
 
 /// Each relax attempt: two Jacobi sweeps moving a seed's displacement halfway to its
 /// neighbours' mean (a fraction that never overshoots, whatever the valence).

@@ -9,10 +9,10 @@
 // that still folds, the displacement field is smoothed; where even that folds (faces the base
 // already made slivers), the region is drawn toward the edit that moves it most. Each acts
 // fully at the fold and less with each ring of neighbours, more strongly on each attempt and
-// over the neighbours of any face still folded. It is local (a few rings around the faces), leaves every vertex away
-// from them bit-identical, and runs in the canonical order of the merge (so peers agree
-// bitwise).
-// Where nothing folds it costs one face test around each moved vertex and allocates nothing.
+// over the neighbours of any face still folded. It is local (a few rings around the faces), leaves
+// every vertex away from them bit-identical, and runs in the canonical order of the merge (so peers
+// agree bitwise). Where nothing folds it costs one face test around each moved vertex and allocates
+// nothing.
 #pragma once
 
 #include <cstdint>
@@ -38,9 +38,9 @@ struct FoldRepairScratch {
   std::vector<std::uint32_t> dominant;  ///< per part: the diff moving it most
   std::vector<double> energy;           ///< per diff: squared displacement over one part
   std::vector<std::uint32_t> region, frontier, next;
-  std::vector<Vec3f> start;  ///< per moved vertex: its position when the current phase began
+  std::vector<Vec3f> start;    ///< per moved vertex: its position when the current phase began
   std::vector<Vec3d> relaxed;  ///< per region vertex: its smoothed displacement in a sweep
-  std::vector<std::uint32_t> seam_first;  ///< per seam group: where its members start in
+  std::vector<std::uint32_t> seam_first;    ///< per seam group: where its members start in
   std::vector<std::uint32_t> seam_members;  ///< ... this list of moved vertices, by group
   std::vector<std::uint8_t> seam_closed;    ///< per seam group: all members at one position
 };

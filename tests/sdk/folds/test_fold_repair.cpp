@@ -81,8 +81,8 @@ TEST(FoldRepair, UnfoldsWhatNoDiffFoldedAndStaysLocal) {
 
   detail::FoldRepairScratch scratch;
   detail::WorkerPool pool(2);
-  const std::uint32_t found = detail::repair_new_folds(topology, base.positions, vertices,
-                                                       std::span(diffs), {}, moved, scratch, pool, 4);
+  const std::uint32_t found = detail::repair_new_folds(
+      topology, base.positions, vertices, std::span(diffs), {}, moved, scratch, pool, 4);
   EXPECT_EQ(found, folds_before);
   for (std::size_t i = 0; i < vertices.size(); ++i) {
     float* out = merged.positions.values.data() + 3 * i;
@@ -179,7 +179,6 @@ TEST(FoldRepair, LongScriptedSessionsOfFourArtistsMergeWithoutNewFolds) {
     }
   }
 }
-
 
 /// The grid with its middle column split: the cells right of it use copies of the column's
 /// vertices (coincident, unconnected, as a UV seam leaves them). `twins` gets the pairs.
