@@ -82,7 +82,11 @@ class Journal(unittest.TestCase):
                 agreed.setdefault(v, set()).update(digests)
         # One history before the kill: each version had one mesh on every peer.
         for v, digests in agreed.items():
-            self.assertEqual(len(digests), 1, f"version {v} had meshes {digests}")
+            # On a failure, who merged what: a branch shows as two mergers or epochs for v.
+            made_by = {p.peer_id: [(e["merger"], e["epoch"]) for e in p.events("version")
+                                   if e["version"] == v] for p in before}
+            self.assertEqual(len(digests), 1,
+                             f"version {v} had meshes {digests}; (merger, epoch) seen: {made_by}")
 
         started = time.time()
         # New markers numbered after the ones made before the kill.
