@@ -219,8 +219,8 @@ std::unique_ptr<peer::Session> open_session(const PeerCommandOptions& o,
 
 /// The digests of the artist's mesh and the session's base, hashed again only when the artist's
 /// generation or the version moved, and at least every kRefresh in case something changed them
-/// otherwise: hashing both meshes on every 3 ms turn took most of a core per peer process, and
-/// the peers share the machine with the hosts they test.
+/// otherwise: hashing both meshes on every 3 ms turn took a quarter of the peer processes' CPU,
+/// on the cores the hosts they test share.
 class Digests {
  public:
   void refresh(const peer::Session& session, SimulatedArtist& artist) {

@@ -73,6 +73,13 @@ bool block_differs(const std::vector<float>& a, const std::vector<float>& b, uin
 
 }  // namespace
 
+bool MeshArrays::range_differs(const MeshArrays& other, uint32_t first, uint32_t count) const {
+  if (block_differs(positions, other.positions, 3, first, count)) return true;
+  for (size_t c = 0; c < channels.size(); ++c)
+    if (block_differs(channels[c], other.channels[c], widths[c], first, count)) return true;
+  return false;
+}
+
 // A version usually changes a few strokes' worth of vertices: whole blocks compared at memory
 // speed, vertex by vertex only inside the blocks that differ (a call per vertex over every
 // array cost the session worker a core's worth of time at 160K vertices).
@@ -81,16 +88,9 @@ void MeshArrays::differing_vertices(const MeshArrays& other, std::vector<uint32_
   const uint32_t n = vertex_count();
   for (uint32_t first = 0; first < n; first += kBlock) {
     const uint32_t count = std::min(kBlock, n - first);
-    bool differs = block_differs(positions, other.positions, 3, first, count);
-    for (size_t c = 0; c < channels.size() && !differs; ++c)
-      differs = block_differs(channels[c], other.channels[c], widths[c], first, count);
-    if (!differs) continue;
-    for (uint32_t v = first; v < first + count; ++v) {
-      bool vertex_differs = block_differs(positions, other.positions, 3, v, 1);
-      for (size_t c = 0; c < channels.size() && !vertex_differs; ++c)
-        vertex_differs = block_differs(channels[c], other.channels[c], widths[c], v, 1);
-      if (vertex_differs) out.push_back(v);
-    }
+    if (!range_differs(other, first, count)) continue;
+    for (uint32_t v = first; v < first + count; ++v)
+      if (range_differs(other, v, 1)) out.push_back(v);
   }
 }
 

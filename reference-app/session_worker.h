@@ -37,6 +37,8 @@ struct MeshArrays {
   void write(uint32_t v, const float* in);
   /** Appends the vertices whose values differ bitwise from `other`'s (same layout), increasing. */
   void differing_vertices(const MeshArrays& other, std::vector<uint32_t>& out) const;
+  /** Whether any value of vertices [first, first + count) differs bitwise from `other`'s. */
+  bool range_differs(const MeshArrays& other, uint32_t first, uint32_t count) const;
   /** The arrays of `mesh` (a csc_mesh), with its channels' ranges. */
   static MeshArrays of(const csc_mesh* mesh);
 

@@ -201,7 +201,7 @@ struct Repair {
         mean = add(mean, widen(moved[s.seam_members[k]]));
       mean = scale(mean, 1.0 / double(s.seam_first[g + 1] - s.seam_first[g]));
       for (std::uint32_t k = s.seam_first[g]; k < s.seam_first[g + 1]; ++k)
-        moved[s.seam_members[k]] = {float(mean.x), float(mean.y), float(mean.z)};
+        moved[s.seam_members[k]] = narrow(mean);
     }
   }
 
@@ -258,7 +258,7 @@ struct Repair {
       const Vec3d from = widen(s.start[i]);
       const Vec3d p =
           add(from, scale(sub(target_position(phase.remedy, i), from), strength * fade));
-      moved[i] = {float(p.x), float(p.y), float(p.z)};
+      moved[i] = narrow(p);
     }
   }
 
@@ -290,7 +290,7 @@ struct Repair {
       for (std::size_t r = 0; r < s.region.size(); ++r) {
         const std::uint32_t i = s.region[r];
         const Vec3d p = add(widen(base[vertices[i]]), s.relaxed[r]);
-        moved[i] = {float(p.x), float(p.y), float(p.z)};
+        moved[i] = narrow(p);
       }
       weld_seams();
     }

@@ -353,8 +353,7 @@ Vec3f Transport::merged(std::size_t at) const {
     }
     sum = add(sum, count == 1 ? carried : scale(carried, 1.0 / count));
   }
-  return {static_cast<float>(b.x + sum.x), static_cast<float>(b.y + sum.y),
-          static_cast<float>(b.z + sum.z)};
+  return narrow(add(widen(b), sum));
 }
 
 }  // namespace

@@ -37,6 +37,10 @@ struct Vec3d {
 inline Vec3d widen(Vec3f p) {
   return {p.x, p.y, p.z};
 }
+/// Back to float, each coordinate rounded to nearest.
+inline Vec3f narrow(Vec3d p) {
+  return {static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)};
+}
 inline Vec3d add(Vec3d a, Vec3d b) {
   return {a.x + b.x, a.y + b.y, a.z + b.z};
 }
