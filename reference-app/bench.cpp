@@ -49,9 +49,11 @@ int App::run_bench() {
         "{\"bench\":\"app_frames\",\"mode\":\"%s\",\"faces\":%u,\"vertices\":%u,\"width\":%d,"
         "\"height\":%d,\"frames\":%u,\"frame_ms_p50\":%.3f,\"frame_ms_p99\":%.3f,\"frame_ms_max\":%"
         ".3f,"
-        "\"fps_p50\":%.2f,\"fps_p99\":%.2f,\"session_members\":%u,\"versions_applied\":%llu}\n",
+        "\"fps_p50\":%.2f,\"fps_p99\":%.2f,\"drawn_faces\":%u,\"session_members\":%u,"
+        "\"versions_applied\":%llu}\n",
         mode, document_.triangle_count(), document_.vertex_count(), width, height, frames, p50, p99,
-        worst, 1000.0 / p50, 1000.0 / p99, session_.active() ? stats.members : 0u,
+        worst, 1000.0 / p50, 1000.0 / p99, renderer_.drawn_triangles_last(),
+        session_.active() ? stats.members : 0u,
         static_cast<unsigned long long>(stats.versions_applied - versions_before));
     std::fflush(stdout);
     versions_before = stats.versions_applied;

@@ -6,6 +6,8 @@
 #include <numeric>
 #include <unordered_map>
 
+#include "morton.h"
+
 namespace {
 
 using Vec = std::array<double, 3>;
@@ -19,28 +21,16 @@ Vec normalised(const Vec& v) {
   return {v[0] / n, v[1] / n, v[2] / n};
 }
 
-// Spreads the low 10 bits of v so that three of them interleave (Morton order).
-uint32_t spread_bits(uint32_t v) {
-  v &= 0x3ffu;
-  v = (v | (v << 16)) & 0x030000ffu;
-  v = (v | (v << 8)) & 0x0300f00fu;
-  v = (v | (v << 4)) & 0x030c30c3u;
-  v = (v | (v << 2)) & 0x09249249u;
-  return v;
-}
-
-uint32_t morton_code(const float* p) {
-  auto cell = [](float c) {
-    return static_cast<uint32_t>(std::clamp((c + 1.f) * 511.5f, 0.f, 1023.f));
-  };
-  return spread_bits(cell(p[0])) | (spread_bits(cell(p[1])) << 1) | (spread_bits(cell(p[2])) << 2);
+uint32_t sphere_morton_code(const float* p) {  // the unit sphere's box is [-1, 1]^3
+  auto cell = [](float c) { return morton_cell(c, -1.f, 511.5f); };
+  return morton_code(cell(p[0]), cell(p[1]), cell(p[2]));
 }
 
 // Renumbers the vertices along the Morton curve (triangles keep their order and winding).
 void reorder_by_morton(TriangleMesh& mesh) {
   const size_t count = mesh.positions.size() / 3;
   std::vector<uint32_t> codes(count), order(count), new_index(count);
-  for (size_t v = 0; v < count; ++v) codes[v] = morton_code(&mesh.positions[3 * v]);
+  for (size_t v = 0; v < count; ++v) codes[v] = sphere_morton_code(&mesh.positions[3 * v]);
   std::iota(order.begin(), order.end(), 0u);
   std::stable_sort(order.begin(), order.end(),
                    [&](uint32_t a, uint32_t b) { return codes[a] < codes[b]; });

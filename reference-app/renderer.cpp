@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <glm/gtc/type_ptr.hpp>
+#include <glm/matrix.hpp>
+
+#include <cstdint>
 
 namespace {
 
@@ -139,11 +142,12 @@ void Renderer::upload_all(const MeshDocument& document) {
                  static_cast<GLsizeiptr>(vertex_count_ * widths[a] * sizeof(float)), data[a],
                  GL_DYNAMIC_DRAW);
   }
+  clusters_.build(document.positions, document.triangles);
   glBindVertexArray(vao_);
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, index_buffer_);
   glBufferData(GL_ELEMENT_ARRAY_BUFFER,
-               static_cast<GLsizeiptr>(document.triangles.size() * sizeof(uint32_t)),
-               document.triangles.data(), GL_STATIC_DRAW);
+               static_cast<GLsizeiptr>(clusters_.draw_order().size() * sizeof(uint32_t)),
+               clusters_.draw_order().data(), GL_STATIC_DRAW);
   glBindVertexArray(0);
   index_count_ = static_cast<GLsizei>(document.triangles.size());
   uploaded_last_ = vertex_count_;
@@ -169,6 +173,7 @@ void Renderer::upload_range(const MeshDocument& document, uint32_t first, uint32
 void Renderer::upload_vertices(const MeshDocument& document, std::vector<uint32_t>& vertices) {
   uploaded_last_ = 0;
   if (vertices.empty()) return;
+  clusters_.update(document.positions, document.triangles, vertices);
   std::sort(vertices.begin(), vertices.end());
   uint32_t first = vertices[0], last = vertices[0];
   for (size_t i = 1; i <= vertices.size(); ++i) {
@@ -188,9 +193,29 @@ void Renderer::upload_colour_override(std::span<const float> rgb) {
                   rgb.data());
 }
 
+// Only the clusters in view and, with back-face culling, not facing away: GL would discard
+// the rest itself, but only after transforming every vertex of it.
+void Renderer::draw_visible() {
+  draw_counts_.clear();
+  draw_offsets_.clear();
+  drawn_last_ = 0;
+  for (size_t i = 0; i < range_first_.size(); ++i) {
+    draw_counts_.push_back(static_cast<GLsizei>(range_count_[i]));
+    draw_offsets_.push_back(
+        reinterpret_cast<const void*>(uintptr_t{range_first_[i]} * sizeof(uint32_t)));
+    drawn_last_ += range_count_[i] / 3;
+  }
+  if (draw_counts_.empty()) return;
+  glMultiDrawElements(GL_TRIANGLES, draw_counts_.data(), GL_UNSIGNED_INT, draw_offsets_.data(),
+                      static_cast<GLsizei>(draw_counts_.size()));
+}
+
 void Renderer::draw(const glm::mat4& view, const glm::mat4& projection,
                     const ViewSettings& settings) {
   if (index_count_ == 0) return;
+  const glm::vec3 eye(glm::inverse(view)[3]);
+  clusters_.visible_ranges(projection * view, eye, settings.backface_culling, range_first_,
+                           range_count_);
   glEnable(GL_DEPTH_TEST);
   if (settings.backface_culling)
     glEnable(GL_CULL_FACE);
@@ -207,12 +232,12 @@ void Renderer::draw(const glm::mat4& view, const glm::mat4& projection,
     glEnable(GL_POLYGON_OFFSET_FILL);
     glPolygonOffset(1.f, 1.f);
   }
-  glDrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
+  draw_visible();
   if (settings.wireframe) {
     glDisable(GL_POLYGON_OFFSET_FILL);
     glUniform1i(u_wire_, 1);
     glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
-    glDrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
+    draw_visible();
     glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
   }
   glBindVertexArray(0);

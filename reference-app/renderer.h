@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "draw_clusters.h"
 #include "mesh_document.h"
 
 struct ViewSettings {
@@ -35,15 +36,22 @@ class Renderer {
   void upload_colour_override(std::span<const float> rgb);
   void draw(const glm::mat4& view, const glm::mat4& projection, const ViewSettings& settings);
   uint32_t uploaded_vertices_last() const { return uploaded_last_; }
+  /** Triangles the last draw() sent to GL (the clusters in view and not facing away). */
+  uint32_t drawn_triangles_last() const { return drawn_last_; }
 
  private:
   enum Attribute { kPosition, kNormal, kAlbedo, kRoughness, kMetallic, kAttributeCount };
   void upload_range(const MeshDocument& document, uint32_t first, uint32_t count);
+  void draw_visible();
 
   GLuint program_ = 0, vao_ = 0, index_buffer_ = 0;
   GLuint buffers_[kAttributeCount] = {};
   GLint u_view_ = -1, u_projection_ = -1, u_flat_ = -1, u_wire_ = -1;
   GLsizei index_count_ = 0;
-  uint32_t vertex_count_ = 0, uploaded_last_ = 0;
+  uint32_t vertex_count_ = 0, uploaded_last_ = 0, drawn_last_ = 0;
+  DrawClusters clusters_;
+  std::vector<uint32_t> range_first_, range_count_;  // visible index ranges, per draw
+  std::vector<GLsizei> draw_counts_;
+  std::vector<const void*> draw_offsets_;
   std::vector<float> constant_;  // fill for a material channel the mesh lacks
 };
