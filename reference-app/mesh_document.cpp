@@ -167,15 +167,7 @@ void MeshDocument::set_vertex_values(uint32_t vertex, const float* in) {
 
 void MeshDocument::build_topology() {
   const uint32_t vertex_count_ = vertex_count();
-  // Triangles around each vertex, in increasing triangle order (a counting sort).
-  vertex_triangle_offsets.assign(vertex_count_ + 1, 0);
-  for (uint32_t v : triangles) ++vertex_triangle_offsets[v + 1];
-  for (uint32_t v = 0; v < vertex_count_; ++v)
-    vertex_triangle_offsets[v + 1] += vertex_triangle_offsets[v];
-  vertex_triangles.resize(triangles.size());
-  std::vector<uint32_t> fill(vertex_triangle_offsets.begin(), vertex_triangle_offsets.end() - 1);
-  for (size_t i = 0; i < triangles.size(); ++i)
-    vertex_triangles[fill[triangles[i]]++] = static_cast<uint32_t>(i / 3);
+  around.build(triangles, vertex_count_);
   // Neighbours: the other corners of those triangles, sorted and unique.
   neighbour_offsets.assign(vertex_count_ + 1, 0);
   neighbours.clear();
@@ -183,8 +175,8 @@ void MeshDocument::build_topology() {
   std::vector<uint32_t> ring;
   for (uint32_t v = 0; v < vertex_count_; ++v) {
     ring.clear();
-    for (uint32_t k = vertex_triangle_offsets[v]; k < vertex_triangle_offsets[v + 1]; ++k) {
-      const uint32_t* tri = &triangles[3 * size_t{vertex_triangles[k]}];
+    for (uint32_t k = around.offsets[v]; k < around.offsets[v + 1]; ++k) {
+      const uint32_t* tri = &triangles[3 * size_t{around.triangles[k]}];
       for (int c = 0; c < 3; ++c)
         if (tri[c] != v) ring.push_back(tri[c]);
     }
@@ -196,33 +188,26 @@ void MeshDocument::build_topology() {
 }
 
 void MeshDocument::recompute_face_normals(std::span<const uint32_t> faces) {
-  for (uint32_t t : faces) {
-    const uint32_t* tri = &triangles[3 * size_t{t}];
-    const float* a = &positions[3 * size_t{tri[0]}];
-    const float* b = &positions[3 * size_t{tri[1]}];
-    const float* c = &positions[3 * size_t{tri[2]}];
-    const float e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    const float e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    float* n = &face_normals[3 * size_t{t}];
-    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
-    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
-    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
-  }
+  compute_face_normals(positions.data(), triangles, faces, face_normals.data());
 }
 
 void MeshDocument::recompute_normals(std::span<const uint32_t> vertices) {
-  for (uint32_t v : vertices) {
-    float n[3] = {0.f, 0.f, 0.f};
-    for (uint32_t k = vertex_triangle_offsets[v]; k < vertex_triangle_offsets[v + 1]; ++k) {
-      const float* f = &face_normals[3 * size_t{vertex_triangles[k]}];
-      n[0] += f[0];
-      n[1] += f[1];
-      n[2] += f[2];
-    }
-    const float length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    const float scale = length > 0.f ? 1.f / length : 0.f;
-    for (int c = 0; c < 3; ++c) normals[3 * size_t{v} + c] = n[c] * scale;
-  }
+  compute_vertex_normals(around, face_normals.data(), vertices, normals.data());
+}
+
+uint32_t MeshDocument::stale_normals() const {
+  MeshDocument fresh;
+  fresh.positions = positions;
+  fresh.triangles = triangles;
+  fresh.around = around;
+  fresh.recompute_all_normals();
+  auto differing = [](const std::vector<float>& a, const std::vector<float>& b) {
+    uint32_t count = 0;
+    for (size_t i = 0; i < a.size(); i += 3)
+      count += std::memcmp(&a[i], &b[i], 3 * sizeof(float)) != 0;
+    return count;
+  };
+  return differing(fresh.normals, normals) + differing(fresh.face_normals, face_normals);
 }
 
 void MeshDocument::recompute_all_normals() {

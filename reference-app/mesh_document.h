@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "surface_normals.h"
+
 struct MeshChannel {
   std::string name;
   uint32_t width = 1;
@@ -51,6 +53,9 @@ class MeshDocument {
    *  redraws the same). Their triangles' face normals must be current. */
   void recompute_normals(std::span<const uint32_t> vertices);
   void recompute_all_normals();
+  /** Vertex and face normals that differ bitwise from what recomputing them all from the
+   *  positions gives (0 when every path that moves vertices kept them current). */
+  uint32_t stale_normals() const;
 
   std::vector<float> positions;
   std::vector<uint32_t> triangles;
@@ -61,7 +66,7 @@ class MeshDocument {
   std::string label;                               // file name or "built-in sphere"
 
   // Topology (compressed rows): the triangles around each vertex and its neighbours.
-  std::vector<uint32_t> vertex_triangle_offsets, vertex_triangles;
+  VertexTriangles around;
   std::vector<uint32_t> neighbour_offsets, neighbours;
 
  private:

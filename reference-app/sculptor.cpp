@@ -21,9 +21,8 @@ glm::vec3 rotate_about(glm::vec3 v, glm::vec3 axis, float angle) {  // Rodrigues
 
 void Sculptor::reset() {
   const size_t vertices = document_.vertex_count();
-  normal_marks_.resize(vertices);
   dirty_stamp_.assign(vertices, 0);
-  triangle_marks_.resize(document_.triangle_count());
+  normals_change_.resize(static_cast<uint32_t>(vertices), document_.triangle_count());
   dirty_epoch_ = 1;
   dirty_.clear();
   grab_entries_.clear();
@@ -230,36 +229,32 @@ void Sculptor::refresh_after_change(std::span<const uint32_t> vertices, bool pos
   bvh_.tighten(document_.positions, document_.triangles);
 }
 
+void Sculptor::mark_dirty(uint32_t v) {
+  if (dirty_stamp_[v] == dirty_epoch_) return;
+  dirty_stamp_[v] = dirty_epoch_;
+  dirty_.push_back(v);
+}
+
+void Sculptor::refresh_after_remote_change(std::span<const uint32_t> moved,
+                                           std::span<const uint32_t> normal_vertices,
+                                           std::span<const uint32_t> changed) {
+  bvh_.refit(document_.positions, moved);
+  bvh_.tighten(document_.positions, document_.triangles);
+  for (uint32_t v : normal_vertices) mark_dirty(v);
+  for (uint32_t v : changed) mark_dirty(v);
+}
+
 void Sculptor::refresh(std::span<const uint32_t> vertices, bool positions_changed) {
-  auto mark_dirty = [&](uint32_t v) {
-    if (dirty_stamp_[v] == dirty_epoch_) return;
-    dirty_stamp_[v] = dirty_epoch_;
-    dirty_.push_back(v);
-  };
   if (!positions_changed) {
     for (uint32_t v : vertices) mark_dirty(v);
     return;
   }
   // A moved vertex changes the normals of every corner of its triangles.
-  changed_triangles_.clear();
-  normal_vertices_.clear();
-  for (uint32_t v : vertices)
-    for (uint32_t k = document_.vertex_triangle_offsets[v];
-         k < document_.vertex_triangle_offsets[v + 1]; ++k) {
-      const uint32_t t = document_.vertex_triangles[k];
-      if (!triangle_marks_.mark(t)) continue;
-      changed_triangles_.push_back(t);
-      for (int c = 0; c < 3; ++c) {
-        const uint32_t corner = document_.triangles[3 * size_t{t} + c];
-        if (normal_marks_.mark(corner)) normal_vertices_.push_back(corner);
-      }
-    }
-  triangle_marks_.clear(changed_triangles_);
-  normal_marks_.clear(normal_vertices_);
-  document_.recompute_face_normals(changed_triangles_);
-  document_.recompute_normals(normal_vertices_);
+  normals_change_.collect(document_.triangles, document_.around, vertices);
+  document_.recompute_face_normals(normals_change_.triangles);
+  document_.recompute_normals(normals_change_.vertices);
   bvh_.refit(document_.positions, vertices);
-  for (uint32_t v : normal_vertices_) mark_dirty(v);
+  for (uint32_t v : normals_change_.vertices) mark_dirty(v);
 }
 
 void Sculptor::clear_dirty() {

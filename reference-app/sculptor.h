@@ -12,7 +12,6 @@
 
 #include "brush.h"
 #include "bvh.h"
-#include "marks.h"
 #include "mesh_document.h"
 #include "stroke_history.h"
 
@@ -40,9 +39,15 @@ class Sculptor {
   /** The stroke's dabs left the BVH's upper boxes loose (cheap per dab): tightened once. */
   void stroke_ended() { bvh_.tighten(document_.positions, document_.triangles); }
 
-  /** After positions (or only channels) of `vertices` changed outside a stroke (undo, a
-   *  merged version): normals around them, BVH boxes, and the renderer's queue. */
+  /** After positions (or only channels) of `vertices` changed outside a stroke (a solo
+   *  undo or redo): normals around them, BVH boxes, and the renderer's queue. */
   void refresh_after_change(std::span<const uint32_t> vertices, bool positions_changed);
+  /** After a merged version whose values and normals the document already holds (computed
+   *  by the session worker): the BVH boxes around `moved`, and the renderer's queue for
+   *  `normal_vertices` and `changed`. */
+  void refresh_after_remote_change(std::span<const uint32_t> moved,
+                                   std::span<const uint32_t> normal_vertices,
+                                   std::span<const uint32_t> changed);
   /** Vertices to re-upload (unique, unsorted); the renderer clears it. */
   std::vector<uint32_t>& dirty_vertices() { return dirty_; }
   void clear_dirty();
@@ -64,6 +69,7 @@ class Sculptor {
   void apply(const DabInput& input, const BrushSettings& settings, glm::vec3 center, float parity);
   std::span<const glm::vec3> mirrors(const BrushSettings& settings);
   uint32_t next_stamp(std::vector<uint32_t>& stamps, uint32_t& epoch);
+  void mark_dirty(uint32_t v);  // queued for the renderer once
   /** refresh_after_change within a stroke: the BVH's upper boxes only grow. */
   void refresh(std::span<const uint32_t> vertices, bool positions_changed);
   glm::vec3 position(uint32_t v) const;
@@ -76,10 +82,10 @@ class Sculptor {
   std::vector<RegionVertex> region_;
   std::vector<glm::vec3> targets_;
   std::vector<glm::vec3> mirrors_;
-  Marks triangle_marks_, normal_marks_;  // clear between dabs
+  NormalsChange normals_change_;
   std::vector<uint32_t> dirty_stamp_;
   uint32_t dirty_epoch_ = 1;
-  std::vector<uint32_t> changed_, changed_triangles_, normal_vertices_, dirty_;
+  std::vector<uint32_t> changed_, dirty_;
   std::vector<GrabEntry> grab_entries_;
   uint32_t last_dab_vertices_ = 0;
 };

@@ -11,7 +11,8 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(__file__))
-from applib import APP, TEST_SPHERE, Mesh, Replay, changed_in, moved_vertices, run_app, temp_dir  # noqa: E402
+from applib import (APP, TEST_SPHERE, Mesh, Replay, assert_normals_current, changed_in,  # noqa: E402
+                    moved_vertices, run_app, temp_dir)
 
 
 class TwoApps(unittest.TestCase):
@@ -38,6 +39,8 @@ class TwoApps(unittest.TestCase):
 
         with open(host_ply, "rb") as a, open(join_ply, "rb") as b:
             self.assertEqual(a.read(), b.read(), "the two apps ended with different meshes")
+        assert_normals_current(self, host_out)  # normals computed on the session worker
+        assert_normals_current(self, joiner.stdout)
         before, after = Mesh(base), Mesh(host_ply)
         self.assertEqual(after.vertex_count, before.vertex_count)  # the joiner got the host's mesh
         moved = moved_vertices(before, after)

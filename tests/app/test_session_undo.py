@@ -12,7 +12,7 @@ import sys
 import unittest
 
 sys.path.insert(0, os.path.dirname(__file__))
-from applib import APP, TEST_SPHERE, Mesh, Replay, run_app, temp_dir  # noqa: E402
+from applib import APP, TEST_SPHERE, Mesh, Replay, assert_normals_current, run_app, temp_dir  # noqa: E402
 
 HOST_STROKE = ((540, 400), (740, 400))   # across the sphere's middle
 JOIN_STROKE = ((640, 300), (640, 500))   # down through the same middle
@@ -48,6 +48,8 @@ class SessionUndo(unittest.TestCase):
         self.assertEqual(joiner.returncode, 0, joiner.stderr)
         host_out, host_err = host.communicate(timeout=120)
         self.assertEqual(host.returncode, 0, host_err)
+        assert_normals_current(self, host_out)
+        assert_normals_current(self, joiner.stdout)
         return Mesh(host_ply), Mesh(join_ply), host_out
 
     def test_undo_removes_my_stroke_everywhere_and_keeps_the_others(self):

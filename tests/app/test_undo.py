@@ -7,7 +7,7 @@ import sys
 import unittest
 
 sys.path.insert(0, os.path.dirname(__file__))
-from applib import TEST_SPHERE, Replay, run_app, temp_dir  # noqa: E402
+from applib import TEST_SPHERE, Replay, assert_normals_current, run_app, temp_dir  # noqa: E402
 
 STROKE = ((590, 400), (690, 410))
 
@@ -17,8 +17,9 @@ class Undo(unittest.TestCase):
         """(saved PLY bytes, screenshot PNG bytes) after the replay; panels hidden."""
         directory = temp_dir(self)
         ply, png = os.path.join(directory, "out.ply"), os.path.join(directory, "out.png")
-        run_app(*TEST_SPHERE, "--replay", replay.write(directory), "--exit-after", "0", "--save", ply,
-                "--screenshot", png)
+        result = run_app(*TEST_SPHERE, "--replay", replay.write(directory), "--exit-after", "0",
+                         "--save", ply, "--screenshot", png)
+        assert_normals_current(self, result.stdout)  # after strokes, undo and redo
         with open(ply, "rb") as a, open(png, "rb") as b:
             return a.read(), b.read()
 
