@@ -186,17 +186,15 @@ void App::take_session_changes() {
   const std::shared_ptr<const MeshChanges> changes = session_.take_changes();
   if (!changes || changes->vertices.empty()) return;
   const uint32_t stride = document_.values_per_vertex();
-  for (size_t i = 0; i < changes->vertices.size(); ++i)
-    document_.set_vertex_values(changes->vertices[i], &changes->values[i * stride]);
-  // The normals come computed (on the worker, off this thread): copied, not recomputed.
-  for (size_t i = 0; i < changes->triangles.size(); ++i)
-    std::copy_n(&changes->face_normals[3 * i], 3,
-                &document_.face_normals[3 * size_t{changes->triangles[i]}]);
-  for (size_t i = 0; i < changes->normal_vertices.size(); ++i)
-    std::copy_n(&changes->normals[3 * i], 3,
-                &document_.normals[3 * size_t{changes->normal_vertices[i]}]);
-  sculptor_.refresh_after_remote_change(changes->moved, changes->normal_vertices,
-                                        changes->vertices);
+  bool moved = false;
+  for (size_t i = 0; i < changes->vertices.size(); ++i) {
+    const uint32_t v = changes->vertices[i];
+    const float* values = &changes->values[i * stride];
+    const float* p = &document_.positions[3 * size_t{v}];
+    moved = moved || p[0] != values[0] || p[1] != values[1] || p[2] != values[2];
+    document_.set_vertex_values(v, values);
+  }
+  sculptor_.refresh_after_change(changes->vertices, moved);
   attribution_dirty_ = true;
 }
 
@@ -292,8 +290,8 @@ void App::finish() {
     if (!write_screenshot(options_.screenshot_path, width, height, error)) report(error);
   }
   if (!options_.save_path.empty() && !document_.save(options_.save_path, error)) report(error);
-  // For the tests: normals copied from the session worker, or kept current by the brushes and
-  // undo, must be the bits a full recomputation gives (a stale one is a shading seam).
+  // For the tests: the normals the brushes, undo and merged versions kept current must be the
+  // bits a full recomputation gives (a stale one is a shading seam).
   if (std::getenv("CSCULPT_APP_CHECK_NORMALS"))
     std::printf("NORMALS stale=%u\n", document_.stale_normals());
   if (session_.active()) {  // for scripts: where this peer's session stood when it quit

@@ -235,15 +235,6 @@ void Sculptor::mark_dirty(uint32_t v) {
   dirty_.push_back(v);
 }
 
-void Sculptor::refresh_after_remote_change(std::span<const uint32_t> moved,
-                                           std::span<const uint32_t> normal_vertices,
-                                           std::span<const uint32_t> changed) {
-  bvh_.refit(document_.positions, moved);
-  bvh_.tighten(document_.positions, document_.triangles);
-  for (uint32_t v : normal_vertices) mark_dirty(v);
-  for (uint32_t v : changed) mark_dirty(v);
-}
-
 void Sculptor::refresh(std::span<const uint32_t> vertices, bool positions_changed) {
   if (!positions_changed) {
     for (uint32_t v : vertices) mark_dirty(v);

@@ -39,15 +39,9 @@ class Sculptor {
   /** The stroke's dabs left the BVH's upper boxes loose (cheap per dab): tightened once. */
   void stroke_ended() { bvh_.tighten(document_.positions, document_.triangles); }
 
-  /** After positions (or only channels) of `vertices` changed outside a stroke (a solo
-   *  undo or redo): normals around them, BVH boxes, and the renderer's queue. */
+  /** After positions (or only channels) of `vertices` changed outside a stroke (undo, a
+   *  merged version): normals around them, BVH boxes, and the renderer's queue. */
   void refresh_after_change(std::span<const uint32_t> vertices, bool positions_changed);
-  /** After a merged version whose values and normals the document already holds (computed
-   *  by the session worker): the BVH boxes around `moved`, and the renderer's queue for
-   *  `normal_vertices` and `changed`. */
-  void refresh_after_remote_change(std::span<const uint32_t> moved,
-                                   std::span<const uint32_t> normal_vertices,
-                                   std::span<const uint32_t> changed);
   /** Vertices to re-upload (unique, unsorted); the renderer clears it. */
   std::vector<uint32_t>& dirty_vertices() { return dirty_; }
   void clear_dirty();

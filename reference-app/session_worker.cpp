@@ -26,27 +26,6 @@ csc_session_options app_options() {
   return options;
 }
 
-// Appends the vertices v of [0, n) for which differs(v, 1) holds. A version usually changes a
-// few strokes' worth of vertices: whole blocks compared at memory speed, vertex by vertex only
-// inside the blocks that differ (a call per vertex over every array cost the session worker a
-// core's worth of time at 160K vertices).
-template <typename Differs>
-void append_differing(uint32_t n, Differs&& differs, std::vector<uint32_t>& out) {
-  constexpr uint32_t kBlock = 64;
-  for (uint32_t first = 0; first < n; first += kBlock) {
-    const uint32_t count = std::min(kBlock, n - first);
-    if (!differs(first, count)) continue;
-    for (uint32_t v = first; v < first + count; ++v)
-      if (differs(v, 1)) out.push_back(v);
-  }
-}
-
-bool positions_differ(const std::vector<float>& a, const std::vector<float>& b, uint32_t first,
-                      uint32_t count) {
-  return std::memcmp(&a[3 * size_t{first}], &b[3 * size_t{first}],
-                     3 * size_t{count} * sizeof(float)) != 0;
-}
-
 }  // namespace
 
 // ---- MeshArrays -----------------------------------------------------------------------------
@@ -101,10 +80,18 @@ bool MeshArrays::range_differs(const MeshArrays& other, uint32_t first, uint32_t
   return false;
 }
 
+// A version usually changes a few strokes' worth of vertices: whole blocks compared at memory
+// speed, vertex by vertex only inside the blocks that differ (a call per vertex over every
+// array cost the session worker a core's worth of time at 160K vertices).
 void MeshArrays::differing_vertices(const MeshArrays& other, std::vector<uint32_t>& out) const {
-  append_differing(
-      vertex_count(),
-      [&](uint32_t first, uint32_t count) { return range_differs(other, first, count); }, out);
+  constexpr uint32_t kBlock = 64;
+  const uint32_t n = vertex_count();
+  for (uint32_t first = 0; first < n; first += kBlock) {
+    const uint32_t count = std::min(kBlock, n - first);
+    if (!range_differs(other, first, count)) continue;
+    for (uint32_t v = first; v < first + count; ++v)
+      if (range_differs(other, v, 1)) out.push_back(v);
+  }
 }
 
 MeshArrays MeshArrays::of(const csc_mesh* mesh) {
@@ -125,9 +112,8 @@ MeshArrays MeshArrays::of(const csc_mesh* mesh) {
 
 // ---- SessionWorker: the UI thread's side ----------------------------------------------------
 
-SessionWorker::SessionWorker(csc_session* session, MeshArrays initial,
-                             std::vector<uint32_t> corners)
-    : session_(session), mirror_(std::move(initial)), corners_(std::move(corners)) {
+SessionWorker::SessionWorker(csc_session* session, MeshArrays initial)
+    : session_(session), mirror_(std::move(initial)) {
   shown_ = mirror_;
   state_ = 1;
   local_view_.status = "hosting";
@@ -227,7 +213,6 @@ bool SessionWorker::attribution_colours(std::vector<float>& rgb) {
 
 void SessionWorker::run(std::string invite) {
   if (!invite.empty() && !join(invite)) return;
-  start_normals();
   loop();
   finish();
 }
@@ -249,8 +234,6 @@ bool SessionWorker::join(const std::string& invite) {
   session_ = session;
   mirror_ = MeshArrays::of(base);
   shown_ = mirror_;
-  const uint32_t* corners = csc_mesh_triangles(base);
-  corners_.assign(corners, corners + 3 * size_t{csc_mesh_triangle_count(base)});
   joined_mesh_ = base;
   local_view_.status = "joined";
   state_ = 1;
@@ -465,7 +448,6 @@ void SessionWorker::publish() {
     box->values.resize(box->vertices.size() * stride);
     for (size_t i = 0; i < box->vertices.size(); ++i)
       mirror_.read(box->vertices[i], &box->values[i * stride]);
-    attach_normals(*box);
     box->includes = done_;
     dirty_ = false;
   }
@@ -488,51 +470,6 @@ void SessionWorker::publish() {
   }
   if (colours) attribution_ = std::move(colours);
   view_ = local_view_;
-}
-
-void SessionWorker::start_normals() {
-  const uint32_t vertex_count = mirror_.vertex_count();
-  const auto triangle_count = static_cast<uint32_t>(corners_.size() / 3);
-  around_.build(corners_, vertex_count);
-  std::vector<uint32_t> all(std::max(vertex_count, triangle_count));
-  for (uint32_t i = 0; i < all.size(); ++i) all[i] = i;
-  face_normals_.resize(corners_.size());
-  compute_face_normals(mirror_.positions.data(), corners_, std::span(all).first(triangle_count),
-                       face_normals_.data());
-  normals_.assign(mirror_.positions.size(), 0.f);
-  normals_at_ = mirror_.positions;
-  stale_.resize(vertex_count, triangle_count);
-  change_.resize(vertex_count, triangle_count);
-}
-
-// The normals the UI's document will have once it holds the box's values: its positions are
-// then the mirror's. Face normals are brought up to the mirror where it moved since they were
-// computed; what the box carries is what changes from what the UI shows.
-void SessionWorker::attach_normals(MeshChanges& box) {
-  const std::vector<float>& at = mirror_.positions;
-  moved_since_.clear();
-  append_differing(
-      mirror_.vertex_count(),
-      [&](uint32_t first, uint32_t count) {
-        return positions_differ(at, normals_at_, first, count);
-      },
-      moved_since_);
-  stale_.collect(corners_, around_, moved_since_);
-  compute_face_normals(at.data(), corners_, stale_.triangles, face_normals_.data());
-  for (uint32_t v : moved_since_) std::copy_n(&at[3 * size_t{v}], 3, &normals_at_[3 * size_t{v}]);
-
-  for (uint32_t v : box.vertices)
-    if (positions_differ(at, shown_.positions, v, 1)) box.moved.push_back(v);
-  change_.collect(corners_, around_, box.moved);
-  compute_vertex_normals(around_, face_normals_.data(), change_.vertices, normals_.data());
-  box.triangles = change_.triangles;
-  box.normal_vertices = change_.vertices;
-  box.face_normals.resize(3 * box.triangles.size());
-  for (size_t i = 0; i < box.triangles.size(); ++i)
-    std::copy_n(&face_normals_[3 * size_t{box.triangles[i]}], 3, &box.face_normals[3 * i]);
-  box.normals.resize(3 * box.normal_vertices.size());
-  for (size_t i = 0; i < box.normal_vertices.size(); ++i)
-    std::copy_n(&normals_[3 * size_t{box.normal_vertices[i]}], 3, &box.normals[3 * i]);
 }
 
 void SessionWorker::note(std::string message) {

@@ -24,8 +24,6 @@
 #include <thread>
 #include <vector>
 
-#include "surface_normals.h"
-
 /** The arrays of a mesh as the app keeps them: positions, then each channel's values. */
 struct MeshArrays {
   std::vector<float> positions;
@@ -76,23 +74,18 @@ struct SessionView {
   uint32_t undo_depth = 0, redo_depth = 0;
 };
 
-/** Changed vertices and their values (stride floats each), as the UI applies them, with the
- *  normals they give (computed by the worker, the bits the document would compute): the face
- *  normals of the triangles around the moved vertices and the normals of their corners. */
+/** Changed vertices and their values (stride floats each), as the UI applies them. */
 struct MeshChanges {
   std::vector<uint32_t> vertices;
   std::vector<float> values;
-  std::vector<uint32_t> moved;  // those of `vertices` whose position changed
-  std::vector<uint32_t> triangles, normal_vertices;
-  std::vector<float> face_normals, normals;  // 3 per triangle, 3 per normal vertex
   uint64_t includes = 0;  // the UI's commands (strokes, undo, redo) the values include
 };
 
 class SessionWorker {
  public:
   /** Starts on a session the UI created (hosting): `session` is handed over with `initial`,
-   *  the arrays it was created from, and its triangles' corners. */
-  SessionWorker(csc_session* session, MeshArrays initial, std::vector<uint32_t> corners);
+   *  the arrays it was created from. */
+  SessionWorker(csc_session* session, MeshArrays initial);
   /** Starts joining `invite` on the worker; joined() and take_joined_mesh() tell the result. */
   SessionWorker(std::string invite, std::string name);
   ~SessionWorker();  // leaves the session and stops the thread
@@ -142,8 +135,6 @@ class SessionWorker {
   void sync();         // update and submit
   void refresh_view();
   void publish();
-  void start_normals();
-  void attach_normals(MeshChanges& box);
   void note(std::string message);
   void finish();
 
@@ -151,13 +142,6 @@ class SessionWorker {
   csc_session* session_ = nullptr;
   std::string name_;  // ours in the session (a joiner's; the host's went to csc_session_create)
   MeshArrays mirror_, shown_;  // the session's side; what the UI's document holds
-  // The mirror's normals, so a published change carries them and the UI only copies them.
-  std::vector<uint32_t> corners_;  // the session mesh's triangles
-  VertexTriangles around_;
-  std::vector<float> face_normals_, normals_;
-  std::vector<float> normals_at_;  // the positions face_normals_ are of
-  NormalsChange stale_, change_;
-  std::vector<uint32_t> moved_since_;
   uint32_t strokes_unsent_ = 0;
   std::vector<uint32_t> unsent_vertices_;  // the strokes' since the last submit (may repeat)
   uint64_t done_ = 0;                      // strokes, undos and redos applied to the mirror

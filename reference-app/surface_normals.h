@@ -1,7 +1,6 @@
-// Face and vertex normals of a triangle mesh, and what moving some vertices changes of them.
-// One copy, used by the document (after a dab or an undo) and by the session worker (for a
-// merged version, before the UI takes it): for the same positions both give the same bits, so
-// an undone stroke redraws the same wherever its normals were computed.
+// Face and vertex normals of a triangle mesh, and what moving some vertices changes of them
+// (after a dab, an undo or a merged version). For the same positions they give the same bits
+// whatever moved them, so an undone stroke redraws exactly as before it.
 #pragma once
 
 #include <cstdint>
