@@ -22,15 +22,16 @@ uniform mat4 u_view;
 uniform mat4 u_projection;
 out vec3 v_position;
 out vec3 v_normal;
-out vec3 v_albedo;
-out float v_roughness;
+out vec3 v_albedo;     // linear (decoded from sRGB here, once per vertex)
+out float v_shininess;  // Blinn-Phong exponent of the roughness
 out float v_metallic;
 void main() {
   vec4 p = u_view * vec4(a_position, 1.0);
   v_position = p.xyz;
   v_normal = mat3(u_view) * a_normal;
-  v_albedo = a_albedo;
-  v_roughness = a_roughness;
+  v_albedo = pow(clamp(a_albedo, 0.0, 1.0), vec3(2.2));
+  float alpha = max(a_roughness * a_roughness, 0.02);
+  v_shininess = 2.0 / (alpha * alpha) - 2.0;
   v_metallic = a_metallic;
   gl_Position = u_projection * p;
 }
@@ -38,12 +39,14 @@ void main() {
 
 // A small PBR-style preview: Lambert diffuse for the albedo a metal lacks, Blinn-Phong
 // specular whose sharpness follows roughness (alpha = roughness^2), tinted by metallic, under
-// a key, a fill and a head light.
+// a key, a fill and a head light. On llvmpipe the fragments are a third of a frame and every
+// pow() is a log and an exp: the albedo's sRGB decode and the exponent are per vertex, and the
+// encode is 1.138 sqrt(c) - 0.138 c, within 0.011 (3 of 255 levels) of c^(1/2.2) on [0, 1].
 constexpr const char* kFragmentShader = R"(#version 330 core
 in vec3 v_position;
 in vec3 v_normal;
 in vec3 v_albedo;
-in float v_roughness;
+in float v_shininess;
 in float v_metallic;
 uniform bool u_flat;
 uniform bool u_wire;
@@ -59,16 +62,15 @@ void main() {
   vec3 n = u_flat ? normalize(cross(dFdx(v_position), dFdy(v_position))) : normalize(v_normal);
   vec3 v = normalize(-v_position);
   if (dot(n, v) < 0.0) n = -n;
-  vec3 albedo = pow(clamp(v_albedo, 0.0, 1.0), vec3(2.2));
-  float alpha = max(v_roughness * v_roughness, 0.02);
-  float shininess = 2.0 / (alpha * alpha) - 2.0;
-  vec3 f0 = mix(vec3(0.04), albedo, v_metallic);
-  vec3 diffuse = albedo * (1.0 - v_metallic);
+  float shininess = v_shininess;
+  vec3 f0 = mix(vec3(0.04), v_albedo, v_metallic);
+  vec3 diffuse = v_albedo * (1.0 - v_metallic);
   vec3 c = vec3(0.10) * diffuse + vec3(0.06) * f0;
   c += light(n, v, normalize(vec3(0.5, 0.7, 0.6)), vec3(0.9), diffuse, f0, shininess);
   c += light(n, v, normalize(vec3(-0.7, 0.1, 0.4)), vec3(0.35, 0.38, 0.45), diffuse, f0, shininess);
   c += light(n, v, vec3(0.0, 0.0, 1.0), vec3(0.25), diffuse, f0, shininess);
-  frag_colour = vec4(pow(c, vec3(1.0 / 2.2)), 1.0);
+  vec3 s = sqrt(c);
+  frag_colour = vec4(1.138 * s - 0.138 * c, 1.0);
 }
 )";
 
