@@ -75,8 +75,9 @@ void DrawClusters::build(const std::vector<float>& positions,
   std::vector<uint32_t> next(vertex_clusters_begin_.begin(), vertex_clusters_begin_.end() - 1);
   for_each_new_pair([&](uint32_t v, uint32_t c) { vertex_clusters_[next[v]++] = c; });
 
-  marks_.resize(clusters_.size());
-  dirty_.clear();
+  stale_marks_.resize(clusters_.size());
+  stale_.clear();
+  stale_next_ = 0;
   for (uint32_t c = 0; c < clusters_.size(); ++c) fit(c, positions, triangles);
 }
 
@@ -126,14 +127,24 @@ void DrawClusters::fit(uint32_t c, const std::vector<float>& positions,
   cluster.sin_spread = std::sqrt(1.f - min_cosine * min_cosine) + kSpreadMargin;
 }
 
-void DrawClusters::update(const std::vector<float>& positions,
-                          const std::vector<uint32_t>& triangles, std::span<const uint32_t> moved) {
+void DrawClusters::mark_moved(std::span<const uint32_t> moved) {
   for (uint32_t v : moved)
     for (uint32_t k = vertex_clusters_begin_[v]; k < vertex_clusters_begin_[v + 1]; ++k)
-      if (marks_.mark(vertex_clusters_[k])) dirty_.push_back(vertex_clusters_[k]);
-  for (uint32_t c : dirty_) fit(c, positions, triangles);
-  marks_.clear(dirty_);
-  dirty_.clear();
+      if (stale_marks_.mark(vertex_clusters_[k])) stale_.push_back(vertex_clusters_[k]);
+}
+
+void DrawClusters::refit_stale(const std::vector<float>& positions,
+                               const std::vector<uint32_t>& triangles, uint32_t budget) {
+  const size_t end = std::min(stale_.size(), stale_next_ + budget);
+  for (size_t i = stale_next_; i < end; ++i) {
+    fit(stale_[i], positions, triangles);
+    stale_marks_.unmark(stale_[i]);  // one by one: the rest of its word may still be stale
+  }
+  stale_next_ = end;
+  if (stale_next_ == stale_.size()) {
+    stale_.clear();
+    stale_next_ = 0;
+  }
 }
 
 // Every triangle faces away from the eye when, for every point p of the cluster's sphere and
@@ -142,6 +153,7 @@ void DrawClusters::update(const std::vector<float>& positions,
 // That proof is cheap but loose near the silhouette; there the triangles' planes decide, each
 // with the eye behind it by a margin for rounding (the first one facing the eye ends the scan).
 bool DrawClusters::faces_away(uint32_t c, glm::vec3 eye) const {
+  if (stale_marks_.marked(c)) return false;
   const Cluster& cluster = clusters_[c];
   const glm::vec3 d = cluster.center - eye;
   const float distance = glm::length(d);
@@ -173,7 +185,9 @@ void DrawClusters::visible_ranges(const glm::mat4& view_projection, glm::vec3 ey
     planes[2 * axis] = w + row;
     planes[2 * axis + 1] = w - row;
   }
-  auto outside_view = [&](const Cluster& cluster) {
+  auto outside_view = [&](uint32_t c) {
+    if (stale_marks_.marked(c)) return false;
+    const Cluster& cluster = clusters_[c];
     for (const glm::vec4& p : planes)
       if (glm::dot(glm::vec3(p), cluster.center) + p.w <
           -cluster.radius * glm::length(glm::vec3(p)))
@@ -182,7 +196,7 @@ void DrawClusters::visible_ranges(const glm::mat4& view_projection, glm::vec3 ey
   };
   const uint32_t index_count = static_cast<uint32_t>(order_.size());
   for (uint32_t c = 0; c < clusters_.size(); ++c) {
-    if (outside_view(clusters_[c]) || (cull_back_faces && faces_away(c, eye))) continue;
+    if (outside_view(c) || (cull_back_faces && faces_away(c, eye))) continue;
     const uint32_t begin = c * 3 * kTriangles;
     const uint32_t size = std::min(3 * kTriangles, index_count - begin);
     if (!first.empty() && first.back() + count.back() == begin)

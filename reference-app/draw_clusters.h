@@ -5,9 +5,10 @@
 // largest saving a frame can get. Triangles are ordered along a Morton curve of their
 // centroids and cut into runs of kTriangles, so each cluster is a compact patch. A cluster is
 // culled when the cone of its normals proves it faces away (no per-triangle work) or, failing
-// that, when every one of its triangles' planes has the eye behind it; after the mesh moves,
-// only the clusters around the moved vertices are recomputed, exactly, so a culled cluster is
-// always wholly back-facing.
+// that, when every one of its triangles' planes has the eye behind it. After the mesh moves,
+// the clusters around the moved vertices are drawn whole until recomputed, a bounded number
+// per frame: a merged version that moved half the mesh costs no frame more than a dab does,
+// and a culled cluster is always wholly back-facing.
 #pragma once
 
 #include <glm/mat4x4.hpp>
@@ -26,9 +27,15 @@ class DrawClusters {
 
   /** Orders the triangles and computes every cluster (after the mesh's layout changed). */
   void build(const std::vector<float>& positions, const std::vector<uint32_t>& triangles);
-  /** Recomputes the clusters holding a triangle of any of `moved`. */
-  void update(const std::vector<float>& positions, const std::vector<uint32_t>& triangles,
-              std::span<const uint32_t> moved);
+  static constexpr uint32_t kRefitsPerFrame = 64;
+
+  /** Marks the clusters holding a triangle of any of `moved` as stale: drawn whole until
+   *  refit_stale() recomputes them. */
+  void mark_moved(std::span<const uint32_t> moved);
+  /** Recomputes up to `budget` stale clusters, oldest first. */
+  void refit_stale(const std::vector<float>& positions, const std::vector<uint32_t>& triangles,
+                   uint32_t budget = kRefitsPerFrame);
+  uint32_t stale_count() const { return static_cast<uint32_t>(stale_.size() - stale_next_); }
 
   /** The triangles' corner indices in cluster order (the index buffer to draw from). */
   const std::vector<uint32_t>& draw_order() const { return order_; }
@@ -39,7 +46,7 @@ class DrawClusters {
   void visible_ranges(const glm::mat4& view_projection, glm::vec3 eye, bool cull_back_faces,
                       std::vector<uint32_t>& first, std::vector<uint32_t>& count) const;
 
-  /** Whether cluster `c` faces wholly away from `eye` (exposed for the tests). */
+  /** Whether cluster `c` faces wholly away from `eye` (never while stale; for the tests). */
   bool faces_away(uint32_t c, glm::vec3 eye) const;
   uint32_t cluster_count() const { return static_cast<uint32_t>(clusters_.size()); }
   /** The triangles of cluster `c` (document indices). */
@@ -60,6 +67,7 @@ class DrawClusters {
   std::vector<Cluster> clusters_;
   // The clusters each vertex's triangles belong to (compressed rows), for update().
   std::vector<uint32_t> vertex_clusters_begin_, vertex_clusters_;
-  Marks marks_;
-  std::vector<uint32_t> dirty_;
+  Marks stale_marks_;
+  std::vector<uint32_t> stale_;  // oldest first, from stale_next_ on
+  size_t stale_next_ = 0;
 };

@@ -19,6 +19,8 @@ class Marks {
     word |= bit;
     return true;
   }
+  bool marked(uint32_t item) const { return (bits_[item >> 6] >> (item & 63)) & 1u; }
+  void unmark(uint32_t item) { bits_[item >> 6] &= ~(uint64_t{1} << (item & 63)); }
   /** Unmarks everything: `marked` must list every item marked since the last clear (whole
    *  words are cleared). */
   void clear(std::span<const uint32_t> marked) {

@@ -174,8 +174,10 @@ void Renderer::upload_range(const MeshDocument& document, uint32_t first, uint32
 
 void Renderer::upload_vertices(const MeshDocument& document, std::vector<uint32_t>& vertices) {
   uploaded_last_ = 0;
+  // Called every frame: the clusters a change left stale are recomputed a few per frame.
+  clusters_.mark_moved(vertices);
+  clusters_.refit_stale(document.positions, document.triangles);
   if (vertices.empty()) return;
-  clusters_.update(document.positions, document.triangles, vertices);
   std::sort(vertices.begin(), vertices.end());
   uint32_t first = vertices[0], last = vertices[0];
   for (size_t i = 1; i <= vertices.size(); ++i) {

@@ -30,7 +30,8 @@ class Renderer {
   bool init(std::string& error);
   /** Uploads the whole mesh (after the layout changed). */
   void upload_all(const MeshDocument& document);
-  /** Uploads `vertices` (sorted here, in place) as a few contiguous glBufferSubData runs. */
+  /** Uploads `vertices` (sorted here, in place) as a few contiguous glBufferSubData runs.
+   *  Called every frame, empty or not: the draw's clusters catch up with earlier changes. */
   void upload_vertices(const MeshDocument& document, std::vector<uint32_t>& vertices);
   /** Replaces the drawn colours (e.g. the attribution view) without touching the document. */
   void upload_colour_override(std::span<const float> rgb);

@@ -1,7 +1,8 @@
 // The renderer's clusters (reference-app/draw_clusters.cpp): a cluster left out of a draw as
 // facing away holds no triangle that faces the eye — on a sculpted surface, with degenerate
-// triangles, from eyes near and far, and after the surface moved (only the clusters around
-// the moved vertices are recomputed) — while most of what faces away on a sphere is left out;
+// triangles, from eyes near and far, and after the surface moved (the clusters around the
+// moved vertices are drawn whole until recomputed, a few per frame) — while most of what faces
+// away on a sphere is left out;
 // the draw order holds every triangle once, with its winding.
 #include <gtest/gtest.h>
 
@@ -122,7 +123,7 @@ TEST(DrawClusters, LeavesOutMostOfWhatFacesAwayOnASphereSeenFromOutside) {
   }
 }
 
-TEST(DrawClusters, AfterTheSurfaceMovesOnlyTheClustersAroundItAreRecomputedAndStayExact) {
+TEST(DrawClusters, AfterTheSurfaceMovesTheClustersAroundItStayExactWhileRecomputedBitByBit) {
   std::mt19937 rng(11);
   TriangleMesh m = sculpted_sphere(rng);
   DrawClusters clusters;
@@ -137,8 +138,40 @@ TEST(DrawClusters, AfterTheSurfaceMovesOnlyTheClustersAroundItAreRecomputedAndSt
     moved.push_back(v);
   }
   ASSERT_GT(moved.size(), 100u);
-  clusters.update(m.positions, m.triangles, moved);
+  clusters.mark_moved(moved);
+  const uint32_t stale = clusters.stale_count();
+  ASSERT_GT(stale, 2u);
+  // Stale clusters are drawn whole: before any refit, and after a partial one (the clusters
+  // left over share bitmap words with those refitted), no culled cluster faces the eye.
+  for (const glm::vec3& eye : eyes(rng, 50)) check_culling(clusters, m, eye);
+  clusters.refit_stale(m.positions, m.triangles, stale / 2);
+  EXPECT_EQ(clusters.stale_count(), stale - stale / 2);
+  for (const glm::vec3& eye : eyes(rng, 50)) check_culling(clusters, m, eye);
+  while (clusters.stale_count() > 0) clusters.refit_stale(m.positions, m.triangles, 3);
   for (const glm::vec3& eye : eyes(rng, 200)) check_culling(clusters, m, eye);
+}
+
+TEST(DrawClusters, AStaleClusterIsNeitherCulledNorLeftOutOfView) {
+  const TriangleMesh m = make_geodesic_sphere(20000);
+  DrawClusters clusters;
+  clusters.build(m.positions, m.triangles);
+  const glm::vec3 eye(0, 0, 3);
+  uint32_t culled = 0;
+  while (culled < clusters.cluster_count() && !clusters.faces_away(culled, eye)) ++culled;
+  ASSERT_LT(culled, clusters.cluster_count());
+  clusters.mark_moved(std::span(m.triangles)
+                          .subspan(3 * size_t{clusters.cluster_triangles(culled)[0]},
+                                   1));  // a corner of its first triangle
+  EXPECT_FALSE(clusters.faces_away(culled, eye));
+  const glm::mat4 away = glm::perspective(0.785f, 1.6f, 0.1f, 20.f) *
+                         glm::lookAt(eye, glm::vec3(0, 0, 6), glm::vec3(0, 1, 0));
+  std::vector<uint32_t> first, count;
+  clusters.visible_ranges(away, eye, true, first, count);
+  ASSERT_FALSE(first.empty());  // only the stale clusters, although none is in view
+  clusters.refit_stale(m.positions, m.triangles);
+  EXPECT_TRUE(clusters.faces_away(culled, eye));
+  clusters.visible_ranges(away, eye, true, first, count);
+  EXPECT_TRUE(first.empty());
 }
 
 TEST(DrawClusters, VisibleRangesLeaveOutWhatIsBehindTheViewOrFacingAway) {
