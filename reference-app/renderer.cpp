@@ -1,6 +1,5 @@
 #include "renderer.h"
 
-#include <algorithm>
 #include <glm/gtc/type_ptr.hpp>
 #include <glm/matrix.hpp>
 
@@ -130,6 +129,7 @@ bool Renderer::init(std::string& error) {
 
 void Renderer::upload_all(const MeshDocument& document) {
   vertex_count_ = document.vertex_count();
+  upload_marks_.resize(vertex_count_);
   constant_.assign(size_t{vertex_count_} * 3, 0.5f);
   auto channel_data = [&](int index) {
     return index >= 0 ? document.channels[index].values.data() : constant_.data();
@@ -172,23 +172,28 @@ void Renderer::upload_range(const MeshDocument& document, uint32_t first, uint32
   upload(kMetallic, channel(document.metallic), 1);
 }
 
-void Renderer::upload_vertices(const MeshDocument& document, std::vector<uint32_t>& vertices) {
+void Renderer::upload_vertices(const MeshDocument& document, std::span<const uint32_t> vertices) {
   uploaded_last_ = 0;
   // Called every frame: the clusters a change left stale are recomputed a few per frame.
   clusters_.mark_moved(vertices);
   clusters_.refit_stale(document.positions, document.triangles);
   if (vertices.empty()) return;
-  std::sort(vertices.begin(), vertices.end());
-  uint32_t first = vertices[0], last = vertices[0];
-  for (size_t i = 1; i <= vertices.size(); ++i) {
-    if (i < vertices.size() && vertices[i] - last <= kRunGap) {
-      last = vertices[i];
-      continue;
-    }
+  // Runs of vertices in increasing order, merged across small gaps.
+  for (uint32_t v : vertices) upload_marks_.mark(v);
+  uint32_t first = UINT32_MAX, last = 0;
+  auto flush = [&] {
     upload_range(document, first, last - first + 1);
     uploaded_last_ += last - first + 1;
-    if (i < vertices.size()) first = last = vertices[i];
-  }
+  };
+  upload_marks_.take_in_order([&](uint32_t v) {
+    if (first != UINT32_MAX && v - last <= kRunGap) {
+      last = v;
+      return;
+    }
+    if (first != UINT32_MAX) flush();
+    first = last = v;
+  });
+  flush();
 }
 
 void Renderer::upload_colour_override(std::span<const float> rgb) {

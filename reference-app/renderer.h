@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "draw_clusters.h"
+#include "marks.h"
 #include "mesh_document.h"
 
 struct ViewSettings {
@@ -30,9 +31,9 @@ class Renderer {
   bool init(std::string& error);
   /** Uploads the whole mesh (after the layout changed). */
   void upload_all(const MeshDocument& document);
-  /** Uploads `vertices` (sorted here, in place) as a few contiguous glBufferSubData runs.
-   *  Called every frame, empty or not: the draw's clusters catch up with earlier changes. */
-  void upload_vertices(const MeshDocument& document, std::vector<uint32_t>& vertices);
+  /** Uploads `vertices` (unique, any order) as a few contiguous glBufferSubData runs. Called
+   *  every frame, empty or not: the draw's clusters catch up with earlier changes. */
+  void upload_vertices(const MeshDocument& document, std::span<const uint32_t> vertices);
   /** Replaces the drawn colours (e.g. the attribution view) without touching the document. */
   void upload_colour_override(std::span<const float> rgb);
   void draw(const glm::mat4& view, const glm::mat4& projection, const ViewSettings& settings);
@@ -51,6 +52,7 @@ class Renderer {
   GLsizei index_count_ = 0;
   uint32_t vertex_count_ = 0, uploaded_last_ = 0, drawn_last_ = 0;
   DrawClusters clusters_;
+  Marks upload_marks_;                               // the vertices of one upload, taken in order
   std::vector<uint32_t> range_first_, range_count_;  // visible index ranges, per draw
   std::vector<GLsizei> draw_counts_;
   std::vector<const void*> draw_offsets_;
