@@ -171,6 +171,15 @@ void TriangleBvh::refit(const std::vector<float>& positions, std::span<const uin
   growing_.clear();
 }
 
+void TriangleBvh::refit_exactly(const std::vector<float>& positions,
+                                const std::vector<uint32_t>& triangles,
+                                std::span<const uint32_t> moved) {
+  for (uint32_t v : moved)
+    for (uint32_t k = vertex_leaves_begin_[v]; k < vertex_leaves_begin_[v + 1]; ++k)
+      if (loose_marks_.mark(vertex_leaves_[k])) loose_.push_back(vertex_leaves_[k]);
+  tighten(positions, triangles);
+}
+
 void TriangleBvh::tighten(const std::vector<float>& positions,
                           const std::vector<uint32_t>& triangles) {
   for (uint32_t leaf : loose_) {

@@ -28,8 +28,12 @@ class TriangleBvh {
    *  leaf). A box may then be larger than it needs be, never too small, until tighten(). */
   void refit(const std::vector<float>& positions, std::span<const uint32_t> moved);
   /** Refits exactly every box refit() grew since the last call, and their ancestors (at the
-   *  end of a stroke, after an undo or a merged version). */
+   *  end of a stroke). */
   void tighten(const std::vector<float>& positions, const std::vector<uint32_t>& triangles);
+  /** Refits exactly the leaves holding a triangle of each `moved` vertex and their ancestors,
+   *  with whatever refit() grew (after an undo or a merged version). */
+  void refit_exactly(const std::vector<float>& positions, const std::vector<uint32_t>& triangles,
+                     std::span<const uint32_t> moved);
   /** The nearest triangle the ray crosses (either side). */
   RayHit raycast(const std::vector<float>& positions, const std::vector<uint32_t>& triangles,
                  glm::vec3 origin, glm::vec3 direction) const;

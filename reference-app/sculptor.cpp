@@ -224,9 +224,19 @@ void Sculptor::grab_move(glm::vec3 delta) {
   refresh(changed_, true);
 }
 
+// Outside a stroke the boxes around what moved are refitted exactly at once: growing them
+// first, as a dab does, would be a pass tighten() then redoes.
 void Sculptor::refresh_after_change(std::span<const uint32_t> vertices, bool positions_changed) {
-  refresh(vertices, positions_changed);
-  bvh_.tighten(document_.positions, document_.triangles);
+  refresh_normals(vertices, positions_changed);
+  if (positions_changed)
+    bvh_.refit_exactly(document_.positions, document_.triangles, vertices);
+  else
+    bvh_.tighten(document_.positions, document_.triangles);
+}
+
+void Sculptor::refresh(std::span<const uint32_t> vertices, bool positions_changed) {
+  refresh_normals(vertices, positions_changed);
+  if (positions_changed) bvh_.refit(document_.positions, vertices);
 }
 
 void Sculptor::mark_dirty(uint32_t v) {
@@ -235,7 +245,7 @@ void Sculptor::mark_dirty(uint32_t v) {
   dirty_.push_back(v);
 }
 
-void Sculptor::refresh(std::span<const uint32_t> vertices, bool positions_changed) {
+void Sculptor::refresh_normals(std::span<const uint32_t> vertices, bool positions_changed) {
   if (!positions_changed) {
     for (uint32_t v : vertices) mark_dirty(v);
     return;
@@ -244,7 +254,6 @@ void Sculptor::refresh(std::span<const uint32_t> vertices, bool positions_change
   normals_change_.collect(document_.triangles, document_.around, vertices);
   document_.recompute_face_normals(normals_change_.triangles);
   document_.recompute_normals(normals_change_.vertices);
-  bvh_.refit(document_.positions, vertices);
   for (uint32_t v : normals_change_.vertices) mark_dirty(v);
 }
 

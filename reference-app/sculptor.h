@@ -66,6 +66,8 @@ class Sculptor {
   void mark_dirty(uint32_t v);  // queued for the renderer once
   /** refresh_after_change within a stroke: the BVH's upper boxes only grow. */
   void refresh(std::span<const uint32_t> vertices, bool positions_changed);
+  /** The normals around `vertices` and the renderer's queue (not the BVH). */
+  void refresh_normals(std::span<const uint32_t> vertices, bool positions_changed);
   glm::vec3 position(uint32_t v) const;
   void set_position(uint32_t v, glm::vec3 p);
 
