@@ -24,10 +24,10 @@
 class DrawClusters {
  public:
   static constexpr uint32_t kTriangles = 512;
+  static constexpr uint32_t kRefitsPerFrame = 64;
 
   /** Orders the triangles and computes every cluster (after the mesh's layout changed). */
   void build(const std::vector<float>& positions, const std::vector<uint32_t>& triangles);
-  static constexpr uint32_t kRefitsPerFrame = 64;
 
   /** Marks the clusters holding a triangle of any of `moved` as stale: drawn whole until
    *  refit_stale() recomputes them. */
@@ -65,7 +65,7 @@ class DrawClusters {
   std::vector<uint32_t> order_;           // 3 corners per drawn triangle
   std::vector<glm::vec4> planes_;         // per drawn triangle: unit normal, offset along it
   std::vector<Cluster> clusters_;
-  // The clusters each vertex's triangles belong to (compressed rows), for update().
+  // The clusters each vertex's triangles belong to (compressed rows), for mark_moved().
   std::vector<uint32_t> vertex_clusters_begin_, vertex_clusters_;
   Marks stale_marks_;
   std::vector<uint32_t> stale_;  // oldest first, from stale_next_ on

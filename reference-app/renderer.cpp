@@ -204,7 +204,10 @@ void Renderer::upload_colour_override(std::span<const float> rgb) {
 
 // Only the clusters in view and, with back-face culling, not facing away: GL would discard
 // the rest itself, but only after transforming every vertex of it.
-void Renderer::draw_visible() {
+void Renderer::find_visible(const glm::mat4& view, const glm::mat4& projection,
+                            bool cull_back_faces) {
+  const glm::vec3 eye(glm::inverse(view)[3]);
+  clusters_.visible_ranges(projection * view, eye, cull_back_faces, range_first_, range_count_);
   draw_counts_.clear();
   draw_offsets_.clear();
   drawn_last_ = 0;
@@ -214,6 +217,9 @@ void Renderer::draw_visible() {
         reinterpret_cast<const void*>(uintptr_t{range_first_[i]} * sizeof(uint32_t)));
     drawn_last_ += range_count_[i] / 3;
   }
+}
+
+void Renderer::draw_visible() const {
   if (draw_counts_.empty()) return;
   glMultiDrawElements(GL_TRIANGLES, draw_counts_.data(), GL_UNSIGNED_INT, draw_offsets_.data(),
                       static_cast<GLsizei>(draw_counts_.size()));
@@ -222,9 +228,7 @@ void Renderer::draw_visible() {
 void Renderer::draw(const glm::mat4& view, const glm::mat4& projection,
                     const ViewSettings& settings) {
   if (index_count_ == 0) return;
-  const glm::vec3 eye(glm::inverse(view)[3]);
-  clusters_.visible_ranges(projection * view, eye, settings.backface_culling, range_first_,
-                           range_count_);
+  find_visible(view, projection, settings.backface_culling);
   glEnable(GL_DEPTH_TEST);
   if (settings.backface_culling)
     glEnable(GL_CULL_FACE);

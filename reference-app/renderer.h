@@ -44,7 +44,9 @@ class Renderer {
  private:
   enum Attribute { kPosition, kNormal, kAlbedo, kRoughness, kMetallic, kAttributeCount };
   void upload_range(const MeshDocument& document, uint32_t first, uint32_t count);
-  void draw_visible();
+  /** The visible clusters' index ranges for this draw (drawn once, or twice for wireframe). */
+  void find_visible(const glm::mat4& view, const glm::mat4& projection, bool cull_back_faces);
+  void draw_visible() const;
 
   GLuint program_ = 0, vao_ = 0, index_buffer_ = 0;
   GLuint buffers_[kAttributeCount] = {};
