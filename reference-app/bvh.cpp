@@ -180,6 +180,14 @@ void TriangleBvh::refit_exactly(const std::vector<float>& positions,
   tighten(positions, triangles);
 }
 
+void TriangleBvh::refit_leaves(const std::vector<float>& positions,
+                               const std::vector<uint32_t>& triangles,
+                               std::span<const uint32_t> leaves) {
+  for (uint32_t leaf : leaves)
+    if (loose_marks_.mark(leaf)) loose_.push_back(leaf);
+  tighten(positions, triangles);
+}
+
 void TriangleBvh::tighten(const std::vector<float>& positions,
                           const std::vector<uint32_t>& triangles) {
   for (uint32_t leaf : loose_) {

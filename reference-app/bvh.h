@@ -1,7 +1,8 @@
 // A bounding-volume hierarchy over the mesh's triangles for the brush's hit test and its
-// region query. Built once per mesh layout; after a dab only the boxes above the moved
-// vertices are refitted (the topology never changes while sculpting, so the tree stays valid,
-// only looser where the surface moved far). Each vertex belongs to one leaf holding a triangle
+// region query. Built once per mesh layout (the topology never changes while sculpting, so
+// the tree stays valid): after a dab the leaves its region query met are refitted exactly with
+// their ancestors; a grab's move, which has no query, only grows boxes, tightened at the
+// stroke's end. Each vertex belongs to one leaf holding a triangle
 // of it, so the region query visits each vertex once, not once per triangle around it.
 #pragma once
 
@@ -34,6 +35,10 @@ class TriangleBvh {
    *  with whatever refit() grew (after an undo or a merged version). */
   void refit_exactly(const std::vector<float>& positions, const std::vector<uint32_t>& triangles,
                      std::span<const uint32_t> moved);
+  /** Refits exactly the given leaves and their ancestors, with whatever refit() grew (after
+   *  a dab, the leaves its region query visited: every triangle around what moved). */
+  void refit_leaves(const std::vector<float>& positions, const std::vector<uint32_t>& triangles,
+                    std::span<const uint32_t> leaves);
   /** The nearest triangle the ray crosses (either side). */
   RayHit raycast(const std::vector<float>& positions, const std::vector<uint32_t>& triangles,
                  glm::vec3 origin, glm::vec3 direction) const;
@@ -41,6 +46,18 @@ class TriangleBvh {
    *  (every vertex inside the sphere among them). */
   template <typename Visit>
   void for_each_vertex_near(glm::vec3 center, float radius, Visit&& visit) const;
+  /** Calls visit(leaf) for every leaf whose box meets the sphere: every triangle with a
+   *  corner inside the sphere is held by one of them. */
+  template <typename Visit>
+  void for_each_leaf_near(glm::vec3 center, float radius, Visit&& visit) const;
+  /** The vertices a leaf owns (each vertex is owned by one leaf) and the triangles it holds. */
+  std::span<const uint32_t> owned_vertices(uint32_t leaf) const {
+    return std::span(owned_).subspan(owned_begin_[leaf],
+                                     owned_begin_[leaf + 1] - owned_begin_[leaf]);
+  }
+  std::span<const uint32_t> leaf_triangles(uint32_t leaf) const {
+    return std::span(order_).subspan(nodes_[leaf].first, nodes_[leaf].count);
+  }
 
   size_t node_count() const { return nodes_.size(); }
 
@@ -83,6 +100,13 @@ class TriangleBvh {
 
 template <typename Visit>
 void TriangleBvh::for_each_vertex_near(glm::vec3 center, float radius, Visit&& visit) const {
+  for_each_leaf_near(center, radius, [&](uint32_t leaf) {
+    for (uint32_t v : owned_vertices(leaf)) visit(v);
+  });
+}
+
+template <typename Visit>
+void TriangleBvh::for_each_leaf_near(glm::vec3 center, float radius, Visit&& visit) const {
   if (nodes_.empty()) return;
   stack_.clear();
   stack_.push_back(0);
@@ -100,7 +124,7 @@ void TriangleBvh::for_each_vertex_near(glm::vec3 center, float radius, Visit&& v
     }
     if (d2 > r2) continue;
     if (node.count > 0) {
-      for (uint32_t i = owned_begin_[index]; i < owned_begin_[index + 1]; ++i) visit(owned_[i]);
+      visit(index);
     } else {
       stack_.push_back(node.first);
       stack_.push_back(index + 1);

@@ -23,6 +23,7 @@ void Sculptor::reset() {
   const size_t vertices = document_.vertex_count();
   dirty_stamp_.assign(vertices, 0);
   normals_change_.resize(static_cast<uint32_t>(vertices), document_.triangle_count());
+  leaf_marks_.resize(bvh_.node_count());
   dirty_epoch_ = 1;
   dirty_.clear();
   grab_entries_.clear();
@@ -63,13 +64,16 @@ std::span<const glm::vec3> Sculptor::mirrors(const BrushSettings& settings) {
 void Sculptor::gather_region(glm::vec3 center, float radius, glm::vec3 view_direction,
                              bool front_only, Falloff falloff) {
   region_.clear();
-  bvh_.for_each_vertex_near(center, radius, [&](uint32_t v) {
-    const float distance = glm::length(position(v) - center);
-    if (distance > radius) return;
-    const float* n = &document_.normals[3 * size_t{v}];
-    if (front_only && glm::dot(glm::vec3(n[0], n[1], n[2]), view_direction) > 0.f) return;
-    const float weight = falloff_weight(falloff, distance / radius);
-    if (weight > 0.f) region_.push_back({v, weight});
+  bvh_.for_each_leaf_near(center, radius, [&](uint32_t leaf) {
+    if (leaf_marks_.mark(leaf)) region_leaves_.push_back(leaf);
+    for (uint32_t v : bvh_.owned_vertices(leaf)) {
+      const float distance = glm::length(position(v) - center);
+      if (distance > radius) continue;
+      const float* n = &document_.normals[3 * size_t{v}];
+      if (front_only && glm::dot(glm::vec3(n[0], n[1], n[2]), view_direction) > 0.f) continue;
+      const float weight = falloff_weight(falloff, distance / radius);
+      if (weight > 0.f) region_.push_back({v, weight});
+    }
   });
   // The order is the tree's (leaves left to right, each one's vertices as built), whichever
   // leaves the refitted boxes let the query visit: every sum and undo record is the same
@@ -78,6 +82,7 @@ void Sculptor::gather_region(glm::vec3 center, float radius, glm::vec3 view_dire
 
 void Sculptor::dab(const DabInput& input, const BrushSettings& settings) {
   changed_.clear();
+  region_leaves_.clear();
   last_dab_vertices_ = 0;
   for (const glm::vec3& m : mirrors(settings)) {
     const float parity = m.x * m.y * m.z;  // a reflection turns a twist the other way
@@ -88,7 +93,24 @@ void Sculptor::dab(const DabInput& input, const BrushSettings& settings) {
     apply(mirrored, settings, input.center * m, parity);
     last_dab_vertices_ += static_cast<uint32_t>(region_.size());
   }
-  refresh(changed_, input.kind != BrushKind::paint);
+  leaf_marks_.clear(region_leaves_);
+  if (input.kind == BrushKind::paint) {
+    refresh_normals(changed_, false);
+    return;
+  }
+  // Every triangle around a moved vertex is held by a leaf the region's query visited, each
+  // by one: their list needs no search around the moved vertices and no repeats removed.
+  normals_change_.triangles.clear();
+  for (uint32_t leaf : region_leaves_)
+    for (uint32_t t : bvh_.leaf_triangles(leaf)) normals_change_.triangles.push_back(t);
+  // The helper lists the triangles' corners while this thread recomputes their face normals
+  // and refits the leaves (the positions are in this core's cache): disjoint data.
+  side_.start([this] { normals_change_.collect_corners(document_.triangles); });
+  document_.recompute_face_normals(normals_change_.triangles);
+  bvh_.refit_leaves(document_.positions, document_.triangles, region_leaves_);
+  side_.wait();
+  document_.recompute_normals(normals_change_.vertices);
+  for (uint32_t v : normals_change_.vertices) mark_dirty(v);
 }
 
 void Sculptor::apply(const DabInput& input, const BrushSettings& settings, glm::vec3 center,
@@ -252,6 +274,10 @@ void Sculptor::refresh_normals(std::span<const uint32_t> vertices, bool position
   }
   // A moved vertex changes the normals of every corner of its triangles.
   normals_change_.collect(document_.triangles, document_.around, vertices);
+  update_changed_normals();
+}
+
+void Sculptor::update_changed_normals() {
   document_.recompute_face_normals(normals_change_.triangles);
   document_.recompute_normals(normals_change_.vertices);
   for (uint32_t v : normals_change_.vertices) mark_dirty(v);

@@ -13,6 +13,7 @@
 #include "brush.h"
 #include "bvh.h"
 #include "mesh_document.h"
+#include "side_task.h"
 #include "stroke_history.h"
 
 struct DabInput {
@@ -68,6 +69,8 @@ class Sculptor {
   void refresh(std::span<const uint32_t> vertices, bool positions_changed);
   /** The normals around `vertices` and the renderer's queue (not the BVH). */
   void refresh_normals(std::span<const uint32_t> vertices, bool positions_changed);
+  /** Recomputes the normals normals_change_ lists and queues their vertices. */
+  void update_changed_normals();
   glm::vec3 position(uint32_t v) const;
   void set_position(uint32_t v, glm::vec3 p);
 
@@ -76,6 +79,10 @@ class Sculptor {
   StrokeHistory& history_;
   // Scratch reused by every dab (no allocation once warmed up).
   std::vector<RegionVertex> region_;
+  // The BVH leaves the dab's region queries visited (each once over the mirrors).
+  std::vector<uint32_t> region_leaves_;
+  Marks leaf_marks_;
+  SideTask side_;
   std::vector<glm::vec3> targets_;
   std::vector<glm::vec3> mirrors_;
   NormalsChange normals_change_;

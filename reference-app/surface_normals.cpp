@@ -52,17 +52,19 @@ void NormalsChange::resize(uint32_t vertex_count, uint32_t triangle_count) {
 void NormalsChange::collect(std::span<const uint32_t> corners, const VertexTriangles& around,
                             std::span<const uint32_t> moved) {
   triangles.clear();
-  vertices.clear();
   for (uint32_t v : moved)
-    for (uint32_t k = around.offsets[v]; k < around.offsets[v + 1]; ++k) {
-      const uint32_t t = around.triangles[k];
-      if (!triangle_marks_.mark(t)) continue;
-      triangles.push_back(t);
-      for (int c = 0; c < 3; ++c) {
-        const uint32_t corner = corners[3 * size_t{t} + c];
-        if (vertex_marks_.mark(corner)) vertices.push_back(corner);
-      }
-    }
+    for (uint32_t k = around.offsets[v]; k < around.offsets[v + 1]; ++k)
+      if (triangle_marks_.mark(around.triangles[k])) triangles.push_back(around.triangles[k]);
   triangle_marks_.clear(triangles);
+  collect_corners(corners);
+}
+
+void NormalsChange::collect_corners(std::span<const uint32_t> corners) {
+  vertices.clear();
+  for (uint32_t t : triangles)
+    for (int c = 0; c < 3; ++c) {
+      const uint32_t corner = corners[3 * size_t{t} + c];
+      if (vertex_marks_.mark(corner)) vertices.push_back(corner);
+    }
   vertex_marks_.clear(vertices);
 }

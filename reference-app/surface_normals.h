@@ -31,6 +31,9 @@ class NormalsChange {
   void resize(uint32_t vertex_count, uint32_t triangle_count);
   void collect(std::span<const uint32_t> corners, const VertexTriangles& around,
                std::span<const uint32_t> moved);
+  /** For a caller that listed the triangles itself (each once, a superset of those around
+   *  what moved is fine: recomputing an unchanged normal gives the same bits): their corners. */
+  void collect_corners(std::span<const uint32_t> corners);
   std::vector<uint32_t> triangles, vertices;
 
  private:

@@ -1,7 +1,7 @@
 // The brush's spatial index (reference-app/bvh.cpp): after any sequence of dabs that move
-// vertices (refit grows boxes, tighten refits them exactly, refit_exactly both at once), the
-// region query finds exactly the vertices a brute-force search finds, each once, and a ray
-// hits what brute force hits.
+// vertices (refit grows boxes, tighten refits them exactly, refit_exactly both at once,
+// refit_leaves refits the leaves a dab's region query met), the region query finds exactly
+// the vertices a brute-force search finds, each once, and a ray hits what brute force hits.
 #include <gtest/gtest.h>
 
 #include <glm/geometric.hpp>
@@ -64,11 +64,26 @@ TEST(AppBvh, QueriesAndRaysMatchBruteForceThroughGrownTightenedAndExactRefits) {
     // A stroke of dabs pushing out (and, every other stroke, in), tightened at its end.
     const glm::vec3 c = random_point();
     const float depth = step % 2 ? -0.15f : 0.3f;
+    // The leaves the dab's region meets hold every triangle with a corner in it, each once:
+    // the app's dab recomputes those triangles' normals and refits those leaves.
+    std::vector<uint32_t> leaves;
+    bvh.for_each_leaf_near(c, 0.3f, [&](uint32_t leaf) { leaves.push_back(leaf); });
+    std::vector<int> held(m.triangles.size() / 3, 0);
+    for (uint32_t leaf : leaves)
+      for (uint32_t t : bvh.leaf_triangles(leaf)) ++held[t];
+    for (uint32_t t = 0; t < held.size(); ++t) {
+      bool inside = false;
+      for (int k = 0; k < 3; ++k) inside |= glm::length(at(m, m.triangles[3 * t + k]) - c) <= 0.3f;
+      ASSERT_EQ(held[t], inside ? 1 : held[t]) << "step " << step << " triangle " << t;
+      ASSERT_LE(held[t], 1);
+    }
     const std::vector<uint32_t> moved = dab(m, c, 0.3f, depth);
     if (step % 4 == 3)
       bvh.refit_exactly(m.positions, m.triangles, moved);  // an undo or a merged version
+    else if (step % 4 == 1)
+      bvh.refit_leaves(m.positions, m.triangles, leaves);  // a dab
     else
-      bvh.refit(m.positions, moved);
+      bvh.refit(m.positions, moved);  // a grab's move
     if (step % 3 == 2) bvh.tighten(m.positions, m.triangles);
     for (int q = 0; q < 5; ++q) {
       const glm::vec3 qc = q == 0 ? c * 1.2f : random_point() * (0.8f + 0.4f * (u(rng) + 1.f));
