@@ -6,6 +6,7 @@
 #include <imgui.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -244,7 +245,9 @@ bool App::frame() {
   glfwPollEvents();
   if (const std::optional<float> pressure = tablet_.poll()) on_pressure(*pressure);
   if (replay_.active()) replay_.step(*this);
+  const auto tick_start = std::chrono::steady_clock::now();
   session_tick();
+  const auto tick_end = std::chrono::steady_clock::now();
   if (attribution_view_ && !session_.active())
     toggle_attribution_view();  // left: real colours back
   if (attribution_view_ && attribution_dirty_) {
@@ -257,6 +260,11 @@ bool App::frame() {
   }
   renderer_.upload_vertices(document_, sculptor_.dirty_vertices());
   sculptor_.clear_dirty();
+  if (benchmarking_frames_) {
+    using ms = std::chrono::duration<double, std::milli>;
+    session_ms_.push_back(ms(tick_end - tick_start).count());
+    upload_ms_.push_back(ms(std::chrono::steady_clock::now() - tick_end).count());
+  }
   render(show_ui_);
   glfwSwapBuffers(window_);
   if (!ready_printed_) {

@@ -135,4 +135,7 @@ class App final : public InputHandlers {
   bool ready_printed_ = false;
   std::vector<double> dab_ms_;  // filled while benchmarking
   bool benchmarking_ = false;
+  // Per timed frame: the session's calls with applying what they brought, and the upload.
+  std::vector<double> session_ms_, upload_ms_;
+  bool benchmarking_frames_ = false;
 };

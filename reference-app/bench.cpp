@@ -38,6 +38,8 @@ int App::run_bench() {
   std::vector<double> frame_ms;
   frame_ms.reserve(frames);
   dab_ms_.reserve(size_t{frames} * 16);
+  session_ms_.reserve(frames);
+  upload_ms_.reserve(frames);
   // In a session (--host / --join) the merged versions applied during the phase are counted:
   // the frames then include csc_session_update's rebase of the artist's arrays.
   uint64_t versions_before = session_.stats().versions_applied;
@@ -50,17 +52,24 @@ int App::run_bench() {
         "\"height\":%d,\"frames\":%u,\"frame_ms_p50\":%.3f,\"frame_ms_p99\":%.3f,\"frame_ms_max\":%"
         ".3f,"
         "\"fps_p50\":%.2f,\"fps_p99\":%.2f,\"drawn_faces\":%u,\"session_members\":%u,"
-        "\"versions_applied\":%llu}\n",
+        "\"versions_applied\":%llu,\"session_ms_p99\":%.3f,\"session_ms_max\":%.3f,"
+        "\"upload_ms_p99\":%.3f,\"upload_ms_max\":%.3f}\n",
         mode, document_.triangle_count(), document_.vertex_count(), width, height, frames, p50, p99,
         worst, 1000.0 / p50, 1000.0 / p99, renderer_.drawn_triangles_last(),
         session_.active() ? stats.members : 0u,
-        static_cast<unsigned long long>(stats.versions_applied - versions_before));
+        static_cast<unsigned long long>(stats.versions_applied - versions_before),
+        percentile(session_ms_, 0.99), percentile(session_ms_, 1.0), percentile(upload_ms_, 0.99),
+        percentile(upload_ms_, 1.0));
     std::fflush(stdout);
     versions_before = stats.versions_applied;
+    session_ms_.clear();
+    upload_ms_.clear();
   };
   auto timed_frame = [&] {
     const auto start = std::chrono::steady_clock::now();
+    benchmarking_frames_ = true;
     frame();
+    benchmarking_frames_ = false;
     glFinish();  // count the frame's drawing, not only its submission
     frame_ms.push_back(
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)

@@ -249,11 +249,17 @@ void Sculptor::grab_move(glm::vec3 delta) {
 // Outside a stroke the boxes around what moved are refitted exactly at once: growing them
 // first, as a dab does, would be a pass tighten() then redoes.
 void Sculptor::refresh_after_change(std::span<const uint32_t> vertices, bool positions_changed) {
-  refresh_normals(vertices, positions_changed);
-  if (positions_changed)
-    bvh_.refit_exactly(document_.positions, document_.triangles, vertices);
-  else
+  if (!positions_changed) {
+    refresh_normals(vertices, false);
     bvh_.tighten(document_.positions, document_.triangles);
+    return;
+  }
+  // A merged version moves tens of thousands of vertices: the boxes are refitted on the
+  // helper while this thread recomputes the normals (disjoint data).
+  side_.start(
+      [this, vertices] { bvh_.refit_exactly(document_.positions, document_.triangles, vertices); });
+  refresh_normals(vertices, true);
+  side_.wait();
 }
 
 void Sculptor::refresh(std::span<const uint32_t> vertices, bool positions_changed) {
