@@ -82,7 +82,6 @@ void Sculptor::gather_region(glm::vec3 center, float radius, glm::vec3 view_dire
 
 void Sculptor::dab(const DabInput& input, const BrushSettings& settings) {
   changed_.clear();
-  region_leaves_.clear();
   last_dab_vertices_ = 0;
   for (const glm::vec3& m : mirrors(settings)) {
     const float parity = m.x * m.y * m.z;  // a reflection turns a twist the other way
@@ -93,9 +92,9 @@ void Sculptor::dab(const DabInput& input, const BrushSettings& settings) {
     apply(mirrored, settings, input.center * m, parity);
     last_dab_vertices_ += static_cast<uint32_t>(region_.size());
   }
-  leaf_marks_.clear(region_leaves_);
   if (input.kind == BrushKind::paint) {
     refresh_normals(changed_, false);
+    forget_region_leaves();
     return;
   }
   // Every triangle around a moved vertex is held by a leaf the region's query visited, each
@@ -111,6 +110,12 @@ void Sculptor::dab(const DabInput& input, const BrushSettings& settings) {
   side_.wait();
   document_.recompute_normals(normals_change_.vertices);
   for (uint32_t v : normals_change_.vertices) mark_dirty(v);
+  forget_region_leaves();
+}
+
+void Sculptor::forget_region_leaves() {
+  leaf_marks_.clear(region_leaves_);
+  region_leaves_.clear();
 }
 
 void Sculptor::apply(const DabInput& input, const BrushSettings& settings, glm::vec3 center,
@@ -232,6 +237,7 @@ void Sculptor::grab_begin(const DabInput& input, const BrushSettings& settings) 
           {r.vertex, r.weight * std::min(1.f, 2.f * input.strength), m, position(r.vertex)});
     }
   }
+  forget_region_leaves();  // a grab's moves grow boxes by vertex (they have no query)
 }
 
 void Sculptor::grab_move(glm::vec3 delta) {

@@ -71,6 +71,8 @@ class Sculptor {
   void refresh_normals(std::span<const uint32_t> vertices, bool positions_changed);
   /** Recomputes the normals normals_change_ lists and queues their vertices. */
   void update_changed_normals();
+  /** Empties region_leaves_ and its marks, as the next region query expects them. */
+  void forget_region_leaves();
   glm::vec3 position(uint32_t v) const;
   void set_position(uint32_t v, glm::vec3 p);
 
@@ -79,7 +81,8 @@ class Sculptor {
   StrokeHistory& history_;
   // Scratch reused by every dab (no allocation once warmed up).
   std::vector<RegionVertex> region_;
-  // The BVH leaves the dab's region queries visited (each once over the mirrors).
+  // The BVH leaves the region queries of one dab or grab met, each once over the mirrors
+  // (marked in leaf_marks_); both empty between calls.
   std::vector<uint32_t> region_leaves_;
   Marks leaf_marks_;
   SideTask side_;

@@ -6,7 +6,8 @@ import sys
 import unittest
 
 sys.path.insert(0, os.path.dirname(__file__))
-from applib import TEST_SPHERE, Mesh, Replay, changed_in, mean, moved_vertices, run_app, temp_dir  # noqa: E402
+from applib import (TEST_SPHERE, Mesh, Replay, assert_normals_current, changed_in, mean,  # noqa: E402
+                    moved_vertices, run_app, temp_dir)
 
 ACROSS = ((590, 400), (690, 400))  # a horizontal stroke through the front pole
 
@@ -27,7 +28,9 @@ class Brushes(unittest.TestCase):
     def sculpt(self, replay):
         directory = temp_dir(self)
         saved = os.path.join(directory, "out.ply")
-        run_app(*TEST_SPHERE, "--replay", replay.write(directory), "--exit-after", "0", "--save", saved)
+        result = run_app(*TEST_SPHERE, "--replay", replay.write(directory), "--exit-after", "0",
+                         "--save", saved)
+        assert_normals_current(self, result.stdout)  # every brush keeps its normals exact
         return Mesh(saved)
 
     def radial_change(self, after, vertices):
@@ -109,6 +112,16 @@ class Brushes(unittest.TestCase):
         self.assertGreater(max(dx), 0.2)  # 100 px is about 0.36 at the pole
         self.assertGreater(min(dx), -1e-6)  # nothing moves against the cursor (symmetry off)
         self.assertLess(abs(mean(dy)), 0.1 * mean(dx))
+
+    def test_a_draw_after_a_grab_over_the_same_spot_raises_it(self):
+        # The grab's region query and the draw's share the BVH's scratch: the draw must still
+        # recompute every normal around what it moved and refit the boxes it crossed.
+        grab_then_draw = Replay().key("x").key("g").drag((640, 400), (660, 400), steps=4)
+        both = self.sculpt(grab_then_draw.key("d").drag(*ACROSS).drag(*ACROSS))
+        grabbed = self.sculpt(Replay().key("x").key("g").drag((640, 400), (660, 400), steps=4))
+        raised = [v for v in moved_vertices(grabbed, both)]
+        self.assertGreater(len(raised), 50)
+        self.assertGreater(mean(both.radius(v) - grabbed.radius(v) for v in raised), 0.005)
 
     def test_x_symmetry_mirrors_and_can_be_turned_off(self):
         right_only = ((700, 380), (740, 380))
