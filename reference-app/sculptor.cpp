@@ -92,11 +92,14 @@ void Sculptor::dab(const DabInput& input, const BrushSettings& settings) {
     apply(mirrored, settings, input.center * m, parity);
     last_dab_vertices_ += static_cast<uint32_t>(region_.size());
   }
-  if (input.kind == BrushKind::paint) {
+  if (input.kind == BrushKind::paint)
     refresh_normals(changed_, false);
-    forget_region_leaves();
-    return;
-  }
+  else
+    refresh_region();
+  forget_region_leaves();
+}
+
+void Sculptor::refresh_region() {
   // Every triangle around a moved vertex is held by a leaf the region's query visited, each
   // by one: their list needs no search around the moved vertices and no repeats removed.
   normals_change_.triangles.clear();
@@ -110,7 +113,6 @@ void Sculptor::dab(const DabInput& input, const BrushSettings& settings) {
   side_.wait();
   document_.recompute_normals(normals_change_.vertices);
   for (uint32_t v : normals_change_.vertices) mark_dirty(v);
-  forget_region_leaves();
 }
 
 void Sculptor::forget_region_leaves() {

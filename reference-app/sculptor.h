@@ -71,6 +71,8 @@ class Sculptor {
   void refresh_normals(std::span<const uint32_t> vertices, bool positions_changed);
   /** Recomputes the normals normals_change_ lists and queues their vertices. */
   void update_changed_normals();
+  /** After a dab moved vertices: the normals around them and the boxes its queries met. */
+  void refresh_region();
   /** Empties region_leaves_ and its marks, as the next region query expects them. */
   void forget_region_leaves();
   glm::vec3 position(uint32_t v) const;
