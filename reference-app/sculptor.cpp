@@ -64,7 +64,9 @@ std::span<const glm::vec3> Sculptor::mirrors(const BrushSettings& settings) {
 void Sculptor::gather_region(glm::vec3 center, float radius, glm::vec3 view_direction,
                              bool front_only, Falloff falloff) {
   region_.clear();
-  bvh_.for_each_leaf_near(center, radius, [&](uint32_t leaf) {
+  // The leaves are met with a hair more than the radius: a vertex accepted at exactly the
+  // radius (its distance rounded differently from the box's) still has all its leaves listed.
+  bvh_.for_each_leaf_near(center, radius * 1.0001f, [&](uint32_t leaf) {
     if (leaf_marks_.mark(leaf)) region_leaves_.push_back(leaf);
     for (uint32_t v : bvh_.owned_vertices(leaf)) {
       const float distance = glm::length(position(v) - center);
@@ -255,7 +257,7 @@ void Sculptor::grab_move(glm::vec3 delta) {
 }
 
 // Outside a stroke the boxes around what moved are refitted exactly at once: growing them
-// first, as a dab does, would be a pass tighten() then redoes.
+// first, as a grab's move does, would be a pass tighten() then redoes.
 void Sculptor::refresh_after_change(std::span<const uint32_t> vertices, bool positions_changed) {
   if (!positions_changed) {
     refresh_normals(vertices, false);

@@ -37,7 +37,7 @@ class Sculptor {
   void grab_begin(const DabInput& input, const BrushSettings& settings);
   void grab_move(glm::vec3 delta);
   void grab_end() { grab_entries_.clear(); }
-  /** The stroke's dabs left the BVH's upper boxes loose (cheap per dab): tightened once. */
+  /** A grab's moves left the BVH's boxes loose (cheap per move): tightened once. */
   void stroke_ended() { bvh_.tighten(document_.positions, document_.triangles); }
 
   /** After positions (or only channels) of `vertices` changed outside a stroke (undo, a
@@ -65,7 +65,7 @@ class Sculptor {
   std::span<const glm::vec3> mirrors(const BrushSettings& settings);
   uint32_t next_stamp(std::vector<uint32_t>& stamps, uint32_t& epoch);
   void mark_dirty(uint32_t v);  // queued for the renderer once
-  /** refresh_after_change within a stroke: the BVH's upper boxes only grow. */
+  /** refresh_after_change for a grab's move: the BVH's boxes only grow. */
   void refresh(std::span<const uint32_t> vertices, bool positions_changed);
   /** The normals around `vertices` and the renderer's queue (not the BVH). */
   void refresh_normals(std::span<const uint32_t> vertices, bool positions_changed);

@@ -3,8 +3,8 @@
 // merged version's boxes are refitted there while its normals are recomputed.
 // The helper sleeps between tasks (a futex wait), so it costs the renderer nothing between
 // them. On a loaded machine it may not be scheduled in time: if the caller finishes its own
-// part before the helper has taken the task, the caller runs the task itself, so a task never
-// takes longer than it would on one thread, plus a compare-and-swap.
+// part before the helper has taken the task, the caller runs the task itself, so a helper
+// that never wakes costs nothing (one that is preempted while running the task still does).
 #pragma once
 
 #include <atomic>
@@ -15,6 +15,7 @@ class SideTask {
  public:
   SideTask() : thread_([this] { loop(); }) {}
   ~SideTask() {
+    wait();  // a task still pending or running (an exception between start and wait) ends first
     state_.store(kQuit);
     state_.notify_all();
     thread_.join();

@@ -114,7 +114,8 @@ class Brushes(unittest.TestCase):
         self.assertLess(abs(mean(dy)), 0.1 * mean(dx))
 
     def test_a_draw_after_a_grab_over_the_same_spot_raises_it(self):
-        # The grab's region query and the draw's share the BVH's scratch: the draw must still
+        # The grab's region query and the draw's share the sculptor's list of leaves met and
+        # its marks: the draw must still
         # recompute every normal around what it moved and refit the boxes it crossed.
         grab_then_draw = Replay().key("x").key("g").drag((640, 400), (660, 400), steps=4)
         both = self.sculpt(grab_then_draw.key("d").drag(*ACROSS).drag(*ACROSS))
