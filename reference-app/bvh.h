@@ -26,8 +26,7 @@ class TriangleBvh {
   void build(const std::vector<float>& positions, const std::vector<uint32_t>& triangles);
   /** Grows the leaves holding a triangle of each `moved` vertex to hold it where it is now,
    *  and their ancestors as far as they must (cheap enough for every move of a grab: most
-   *  stop at the leaf). A box may then be larger than it needs be, never too small, until
-   * tighten(). */
+   *  stop at the leaf). A box may then be too large, never too small, until tighten(). */
   void refit(const std::vector<float>& positions, std::span<const uint32_t> moved);
   /** Refits exactly every box refit() grew since the last call, and their ancestors (at the
    *  end of a stroke). */
