@@ -42,10 +42,6 @@ class TriangleBvh {
   /** The nearest triangle the ray crosses (either side). */
   RayHit raycast(const std::vector<float>& positions, const std::vector<uint32_t>& triangles,
                  glm::vec3 origin, glm::vec3 direction) const;
-  /** Calls visit(vertex) once for every vertex of a triangle whose leaf's box meets the sphere
-   *  (every vertex inside the sphere among them). */
-  template <typename Visit>
-  void for_each_vertex_near(glm::vec3 center, float radius, Visit&& visit) const;
   /** Calls visit(leaf) for every leaf whose box meets the sphere: every triangle with a
    *  corner inside the sphere is held by one of them. */
   template <typename Visit>
@@ -97,13 +93,6 @@ class TriangleBvh {
   std::vector<std::vector<uint32_t>> by_depth_;
   mutable std::vector<uint32_t> stack_;
 };
-
-template <typename Visit>
-void TriangleBvh::for_each_vertex_near(glm::vec3 center, float radius, Visit&& visit) const {
-  for_each_leaf_near(center, radius, [&](uint32_t leaf) {
-    for (uint32_t v : owned_vertices(leaf)) visit(v);
-  });
-}
 
 template <typename Visit>
 void TriangleBvh::for_each_leaf_near(glm::vec3 center, float radius, Visit&& visit) const {

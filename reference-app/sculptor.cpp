@@ -113,8 +113,7 @@ void Sculptor::refresh_region() {
   document_.recompute_face_normals(normals_change_.triangles);
   bvh_.refit_leaves(document_.positions, document_.triangles, region_leaves_);
   side_.wait();
-  document_.recompute_normals(normals_change_.vertices);
-  for (uint32_t v : normals_change_.vertices) mark_dirty(v);
+  update_vertex_normals();
 }
 
 void Sculptor::forget_region_leaves() {
@@ -295,6 +294,10 @@ void Sculptor::refresh_normals(std::span<const uint32_t> vertices, bool position
 
 void Sculptor::update_changed_normals() {
   document_.recompute_face_normals(normals_change_.triangles);
+  update_vertex_normals();
+}
+
+void Sculptor::update_vertex_normals() {
   document_.recompute_normals(normals_change_.vertices);
   for (uint32_t v : normals_change_.vertices) mark_dirty(v);
 }

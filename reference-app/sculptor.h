@@ -71,6 +71,8 @@ class Sculptor {
   void refresh_normals(std::span<const uint32_t> vertices, bool positions_changed);
   /** Recomputes the normals normals_change_ lists and queues their vertices. */
   void update_changed_normals();
+  /** The vertex normals part of it (the face normals already current). */
+  void update_vertex_normals();
   /** After a dab moved vertices: the normals around them and the boxes its queries met. */
   void refresh_region();
   /** Empties region_leaves_ and its marks, as the next region query expects them. */

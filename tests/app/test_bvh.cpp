@@ -24,8 +24,9 @@ glm::vec3 at(const TriangleMesh& m, uint32_t v) {
 
 std::vector<uint32_t> query(const TriangleBvh& bvh, const TriangleMesh& m, glm::vec3 c, float r) {
   std::vector<uint32_t> out;
-  bvh.for_each_vertex_near(c, r, [&](uint32_t v) {
-    if (glm::length(at(m, v) - c) <= r) out.push_back(v);
+  bvh.for_each_leaf_near(c, r, [&](uint32_t leaf) {  // as the brush's region query walks it
+    for (uint32_t v : bvh.owned_vertices(leaf))
+      if (glm::length(at(m, v) - c) <= r) out.push_back(v);
   });
   std::sort(out.begin(), out.end());
   return out;
