@@ -25,24 +25,42 @@ App* app_of(GLFWwindow* window) {
 }
 
 // GLFW callbacks: ImGui sees every event first (its 1.86 backend is not installed with
-// callbacks of its own), then the app decides.
+// callbacks of its own), then the app decides. Every event asks for frames to be drawn.
 void cursor_callback(GLFWwindow* window, double x, double y) {
+  app_of(window)->redraw();
   app_of(window)->on_cursor(x, y);
 }
 void button_callback(GLFWwindow* window, int button, int action, int mods) {
+  app_of(window)->redraw();
   ImGui_ImplGlfw_MouseButtonCallback(window, button, action, mods);
   app_of(window)->on_button(button, action, mods);
 }
 void key_callback(GLFWwindow* window, int key, int scancode, int action, int mods) {
+  app_of(window)->redraw();
   ImGui_ImplGlfw_KeyCallback(window, key, scancode, action, mods);
   app_of(window)->on_key(key, action, mods);
 }
 void char_callback(GLFWwindow* window, unsigned int c) {
+  app_of(window)->redraw();
   ImGui_ImplGlfw_CharCallback(window, c);
 }
 void scroll_callback(GLFWwindow* window, double dx, double dy) {
+  app_of(window)->redraw();
   ImGui_ImplGlfw_ScrollCallback(window, dx, dy);
   app_of(window)->on_scroll(dy);
+}
+// Exposed, resized, focused, entered or left: the picture must be drawn again.
+void refresh_callback(GLFWwindow* window) {
+  app_of(window)->redraw();
+}
+void size_callback(GLFWwindow* window, int, int) {
+  app_of(window)->redraw();
+}
+void focus_callback(GLFWwindow* window, int) {
+  app_of(window)->redraw();
+}
+void enter_callback(GLFWwindow* window, int) {
+  app_of(window)->redraw();
 }
 void error_callback(int code, const char* description) {
   std::fprintf(stderr, "csculpt-app: GLFW error %d: %s\n", code, description);
@@ -99,6 +117,10 @@ bool App::open_window() {
   glfwSetKeyCallback(window_, key_callback);
   glfwSetCharCallback(window_, char_callback);
   glfwSetScrollCallback(window_, scroll_callback);
+  glfwSetWindowRefreshCallback(window_, refresh_callback);
+  glfwSetFramebufferSizeCallback(window_, size_callback);
+  glfwSetWindowFocusCallback(window_, focus_callback);
+  glfwSetCursorEnterCallback(window_, enter_callback);
   if (!tablet_.open(window_, tablet_status_))
     tablet_status_ = "no pen: " + tablet_status_;
   else
@@ -109,6 +131,7 @@ bool App::open_window() {
 void App::report(const std::string& message) {
   error_ = error_.empty() ? message : error_ + "\n" + message;  // keep earlier messages in view
   std::fprintf(stderr, "csculpt-app: %s\n", message.c_str());
+  schedule_.request();
 }
 
 void App::open_start_mesh() {
@@ -136,6 +159,7 @@ void App::layout_changed() {
                 0.5f * std::sqrt(extent.x * extent.x + extent.y * extent.y + extent.z * extent.z));
   std::snprintf(path_text_.data(), path_text_.size(), "%s", "");
   attribution_dirty_ = true;
+  schedule_.request();
 }
 
 void App::host_session() {
@@ -216,6 +240,12 @@ void App::session_tick() {
   }
   if (!session_.active()) return;
   session_.poll_events();
+  // What the session shows changed (a version, a peer, a cursor, a message): draw it once;
+  // the running figures (bytes, latency) are redrawn a few times a second.
+  const uint64_t look = session_.look();
+  if (look != shown_session_look_ || (show_ui_ && schedule_.figures_due(glfwGetTime())))
+    schedule_.request(1);
+  shown_session_look_ = look;
   send_presence();
   if (drag_ != Drag::stroke) take_session_changes();  // never inside a stroke
 }
@@ -240,9 +270,19 @@ void App::render(bool with_ui) {
   ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
 }
 
-// One frame: input, replay, session, uploads, drawing. False when the app should quit.
+// Every frame while a stroke, a replay or a benchmark runs; otherwise only on demand.
+bool App::busy() const {
+  return options_.bench_frames > 0 || replay_.active() || drag_ != Drag::none;
+}
+
+// One frame: input, replay, session, uploads, and drawing when something on screen changed
+// (draw_schedule.h). False when the app should quit.
 bool App::frame() {
-  glfwPollEvents();
+  const double wait = schedule_.wait_seconds(busy(), session_.active() || session_.joining());
+  if (wait > 0)
+    glfwWaitEventsTimeout(wait);
+  else
+    glfwPollEvents();
   if (const std::optional<float> pressure = tablet_.poll()) on_pressure(*pressure);
   if (replay_.active()) replay_.step(*this);
   const auto tick_start = std::chrono::steady_clock::now();
@@ -256,8 +296,10 @@ bool App::frame() {
         attribution_rgb_.size() == size_t{document_.vertex_count()} * 3) {
       renderer_.upload_colour_override(attribution_rgb_);
       attribution_dirty_ = false;
+      schedule_.request(1);
     }
   }
+  if (!sculptor_.dirty_vertices().empty()) schedule_.request(1);
   renderer_.upload_vertices(document_, sculptor_.dirty_vertices());
   sculptor_.clear_dirty();
   if (benchmarking_frames_) {
@@ -265,20 +307,26 @@ bool App::frame() {
     session_ms_.push_back(ms(tick_end - tick_start).count());
     upload_ms_.push_back(ms(std::chrono::steady_clock::now() - tick_end).count());
   }
+  if (!schedule_.take(busy())) return !should_quit();
   render(show_ui_);
   glfwSwapBuffers(window_);
+  ++frames_drawn_;
   if (!ready_printed_) {
     std::puts("READY");
     std::fflush(stdout);
     ready_printed_ = true;
   }
-  if (glfwWindowShouldClose(window_)) return false;
+  return !should_quit();
+}
+
+bool App::should_quit() const {
+  if (glfwWindowShouldClose(window_)) return true;
   // A replay holds the exit back until it has run, unless it waits for a session that failed.
   const bool session_failed =
       replay_.waiting_for_session() && !session_.active() && !session_.joining();
   const bool replay_done = !replay_.loaded() || replay_.finished() || session_failed;
-  return !(options_.exit_after_seconds && replay_done &&
-           glfwGetTime() - start_time_ >= *options_.exit_after_seconds);
+  return options_.exit_after_seconds && replay_done &&
+         glfwGetTime() - start_time_ >= *options_.exit_after_seconds;
 }
 
 // On exit: the last versions in, then the screenshot and the save (issue 11's contract).
@@ -302,6 +350,8 @@ void App::finish() {
   // bits a full recomputation gives (a stale one is a shading seam).
   if (std::getenv("CSCULPT_APP_CHECK_NORMALS"))
     std::printf("NORMALS stale=%u\n", document_.stale_normals());
+  if (std::getenv("CSCULPT_APP_COUNT_FRAMES"))  // for the tests: drawing on demand
+    std::printf("FRAMES drawn=%llu seconds=%.2f\n", frames_drawn_, glfwGetTime() - start_time_);
   if (session_.active()) {  // for scripts: where this peer's session stood when it quit
     const csc_session_stats& stats = session_.stats();
     std::string names;  // the others' names as the peer list shows them (spaces and commas as _)

@@ -14,6 +14,7 @@
 #include "brush.h"
 #include "bvh.h"
 #include "camera.h"
+#include "draw_schedule.h"
 #include "input.h"
 #include "mesh_document.h"
 #include "options.h"
@@ -41,6 +42,8 @@ class App final : public InputHandlers {
   void on_scroll(double dy) override;
   void on_pressure(float pressure) override { pressure_ = pressure; }
   bool in_session() const override { return session_.active(); }
+  /** Something on screen changed: the next frames are drawn (draw_schedule.h). */
+  void redraw() { schedule_.request(); }
   unsigned long long session_version() const override {
     return session_.active() ? session_.version() : 0;
   }
@@ -56,6 +59,8 @@ class App final : public InputHandlers {
   void open_start_mesh();
   void layout_changed();
   bool frame();
+  bool busy() const;
+  bool should_quit() const;
   void render(bool with_ui);
   void session_tick();
   void take_session_changes();
@@ -129,6 +134,11 @@ class App final : public InputHandlers {
   std::string shown_message_;
 
   std::vector<uint32_t> undo_changed_;
+
+  // Drawing on demand: what the last drawn frame showed of the session, and frames drawn.
+  DrawSchedule schedule_;
+  uint64_t shown_session_look_ = 0;
+  unsigned long long frames_drawn_ = 0;
 
   // Timing.
   double start_time_ = 0;

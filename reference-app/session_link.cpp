@@ -54,6 +54,59 @@ void SessionLink::poll_events() {
   messages_.insert(messages_.end(), view_.messages.begin(), view_.messages.end());
 }
 
+namespace {
+
+// FNV-1a over the bytes of each value added: enough to notice a change between two frames.
+class LookDigest {
+ public:
+  template <typename T>
+  void add(const T& value) {
+    const auto* bytes = reinterpret_cast<const unsigned char*>(&value);
+    for (size_t i = 0; i < sizeof value; ++i) h_ = (h_ ^ bytes[i]) * 0x100000001b3ull;
+  }
+  void add(const std::string& text) {
+    for (const char c : text) add(c);
+    add(text.size());
+  }
+  uint64_t value() const { return h_; }
+
+ private:
+  uint64_t h_ = 0xcbf29ce484222325ull;
+};
+
+}  // namespace
+
+uint64_t SessionLink::look() const {
+  LookDigest d;
+  d.add(joined_);
+  d.add(view_.id);
+  d.add(view_.version);
+  d.add(status_);
+  d.add(messages_.size());
+  if (!messages_.empty()) d.add(messages_.back());
+  const csc_session_stats& s = view_.stats;
+  for (const uint64_t counter : {s.merger, s.epoch, uint64_t{s.members}, s.strokes_submitted,
+                                 s.strokes_acknowledged, s.merges})
+    d.add(counter);
+  for (const Peer& p : view_.peers) {
+    d.add(p.id);
+    d.add(p.state);
+    d.add(p.name);
+    d.add(p.merger);
+    d.add(p.version);
+  }
+  for (const Cursor& c : view_.cursors) {
+    d.add(c.peer);
+    d.add(c.position);
+    d.add(c.radius);
+    d.add(c.active);
+    d.add(c.colour);
+  }
+  d.add(view_.undo_depth);
+  d.add(view_.redo_depth);
+  return d.value();
+}
+
 void SessionLink::set_presence(const csc_presence& presence) {
   if (active()) worker_->set_presence(presence);
 }

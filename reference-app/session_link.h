@@ -37,6 +37,9 @@ class SessionLink {
 
   /** Reads what the worker published (peers, cursors, statistics, messages). */
   void poll_events();
+  /** A digest of what the panel and the scene show of the session, but for its running
+   *  figures (bytes, latency, merge time): when it changes, a frame is due. */
+  uint64_t look() const;
   /** This artist's brush cursor (every frame: the library sends at most 20 a second). */
   void set_presence(const csc_presence& presence);
   /** An ended stroke: its vertices and their values before and after it. */
