@@ -308,8 +308,10 @@ bool App::frame() {
     upload_ms_.push_back(ms(std::chrono::steady_clock::now() - tick_end).count());
   }
   if (!schedule_.take(busy())) return !should_quit();
+  const double draw_start = glfwGetTime();
   render(show_ui_);
   glfwSwapBuffers(window_);
+  last_draw_ms_ = 1000.0 * (glfwGetTime() - draw_start);
   ++frames_drawn_;
   if (!ready_printed_) {
     std::puts("READY");

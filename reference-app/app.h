@@ -139,6 +139,7 @@ class App final : public InputHandlers {
   DrawSchedule schedule_;
   uint64_t shown_session_look_ = 0;
   unsigned long long frames_drawn_ = 0;
+  double last_draw_ms_ = 0;  // render and swap of the last frame drawn, for the panel
 
   // Timing.
   double start_time_ = 0;
