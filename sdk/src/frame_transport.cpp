@@ -9,6 +9,15 @@ namespace csculpt::detail {
 namespace {
 
 constexpr std::uint32_t kNoSeam = 0xffffffffu;
+
+/// The spread of the faces' turns around a vertex up to which a diff's rotation there is
+/// trusted as a frame, and the spread (a fold between faces) from which it is not at all.
+constexpr double kSmoothSpread = 30.0 * 3.14159265358979323846 / 180.0;
+constexpr double kFoldSpread = 90.0 * 3.14159265358979323846 / 180.0;
+
+struct Vec4d {
+  double w = 0, x = 0, y = 0, z = 0;
+};
 constexpr std::size_t kMaxUsers = 64;
 
 bool has(const std::uint64_t* bits, std::uint32_t v) {
@@ -53,6 +62,7 @@ class Transport {
 
   void find_seams();
   void share_normals();
+  void share_agreements();
   /// The carrying energies of the chunk's vertices, and each one's carrying levels.
   void chunk_energy(std::size_t begin, std::size_t end, double* energy);
   void finish_weights(std::size_t chunks);
@@ -69,6 +79,9 @@ class Transport {
   double edge_length(std::uint32_t v) const;
   Quat carrier(std::size_t at, std::size_t i, double level) const;
   Vec3d normal(std::size_t at) const;
+  Vec3d edited_position(std::size_t i, std::uint32_t v) const;
+  double faces_agree(std::uint32_t v, std::size_t i) const;
+  double agreement(std::size_t at, std::size_t i) const;
 
   const Topology& topology_;
   std::span<const Vec3f> base_;
@@ -255,6 +268,78 @@ Vec3d Transport::normal(std::size_t at) const {
   return group != kNoSeam ? scratch_.seam_normal[group] : base_normal(vertices_[at]);
 }
 
+Vec3d Transport::edited_position(std::size_t i, std::uint32_t v) const {
+  const TransportInput& u = users_[i];
+  if (!has(u.changed, v)) return widen(base_[v]);
+  const float* e = u.edited + 3 * std::size_t{u.slot[v]};
+  return widen(Vec3f{e[0], e[1], e[2]});
+}
+
+/// The turn taking unit vector a to unit vector b, as a unit quaternion (for b = -a, a half
+/// turn about an axis perpendicular to a).
+Vec4d turn_between(const Vec3d& a, const Vec3d& b) {
+  const double c = dot(a, b);
+  Vec3d axis = cross(a, b);
+  double w = 1 + c;
+  if (!(w > 1e-12)) {  // opposite: any perpendicular axis
+    axis = std::fabs(a.x) < 0.9 ? cross(a, Vec3d{1, 0, 0}) : cross(a, Vec3d{0, 1, 0});
+    w = 0;
+  }
+  const double len = std::sqrt(w * w + norm2(axis));
+  return {w / len, axis.x / len, axis.y / len, axis.z / len};
+}
+
+/// How well the faces around v agree on how diff i turns the surface: 1 where they turn
+/// alike (a bend, a twist, a grab's or a cast's smooth falloff, however far they turn),
+/// falling to 0 where they turn apart by a fold (a thin part crushed by a grab, a face
+/// flipped beside faces that are not). Measured by the length of the mean of the faces'
+/// turns as unit quaternions: 1 when all are one turn, cos(s/2) for turns s apart.
+double Transport::faces_agree(std::uint32_t v, std::size_t i) const {
+  Vec4d sum{}, first{};
+  std::size_t faces = 0;
+  for (std::uint32_t f : topology_.vertex_faces.row(v)) {
+    const Triangle& t = topology_.triangles[f];
+    const Vec3d a = face_cross(f);
+    const Vec3d p0 = edited_position(i, t[0]);
+    const Vec3d b = cross(sub(edited_position(i, t[1]), p0), sub(edited_position(i, t[2]), p0));
+    const double la = std::sqrt(norm2(a)), lb = std::sqrt(norm2(b));
+    if (!(la > 0) || !(lb > 0)) continue;  // a degenerate face says nothing
+    Vec4d q = turn_between(scale(a, 1 / la), scale(b, 1 / lb));
+    if (faces == 0) first = q;
+    if (q.w * first.w + q.x * first.x + q.y * first.y + q.z * first.z < 0)
+      q = {-q.w, -q.x, -q.y, -q.z};
+    sum = {sum.w + q.w, sum.x + q.x, sum.y + q.y, sum.z + q.z};
+    ++faces;
+  }
+  if (faces == 0) return 1.0;
+  const double mean = std::sqrt(sum.w * sum.w + sum.x * sum.x + sum.y * sum.y + sum.z * sum.z) /
+                      static_cast<double>(faces);
+  // Full trust while the faces' turns spread over up to 30 degrees, none from 90 (a fold).
+  const double lo = std::cos(kFoldSpread / 2), hi = std::cos(kSmoothSpread / 2);
+  const double x = std::clamp((mean - lo) / (hi - lo), 0.0, 1.0);
+  return x * x * (3 - 2 * x);
+}
+
+/// Coincident vertices (split seams) take the least agreement of their members, per diff, so
+/// that they are carried alike and the seam stays closed.
+void Transport::share_agreements() {
+  const auto& seam_of = scratch_.seam_of;
+  auto& shared = scratch_.seam_agreement;
+  shared.assign(scratch_.seam_rotation.size(), 1.0);
+  for (std::size_t at = 0; at < vertices_.size(); ++at) {
+    if (seam_of[at] == kNoSeam) continue;
+    for (std::size_t i = 0; i < n_; ++i) {
+      double& a = shared[seam_of[at] * n_ + i];
+      a = std::min(a, faces_agree(vertices_[at], i));
+    }
+  }
+}
+
+double Transport::agreement(std::size_t at, std::size_t i) const {
+  const std::uint32_t group = scratch_.seam_of[at];
+  return group != kNoSeam ? scratch_.seam_agreement[group * n_ + i] : faces_agree(vertices_[at], i);
+}
+
 void Transport::load(std::size_t at, VertexState& s) const {
   const std::uint32_t v = vertices_[at];
   const Vec3f& b = base_[v];
@@ -345,7 +430,9 @@ Vec3f Transport::merged(std::size_t at) const {
     const double level = carrying_level(s.size[j], scratch_.edge[at]);
     for (std::size_t i = n_; i-- > 0;) {
       if (i == j || !s.turns[i]) continue;
-      const double g = (1.0 - same(s, i, j)) * scratch_.weight[i * n_ + j];
+      double g = (1.0 - same(s, i, j)) * scratch_.weight[i * n_ + j];
+      if (!(g > 0)) continue;
+      g *= agreement(at, i);
       if (!(g > 0)) continue;
       if (!have_normal) n = normal(at), have_normal = true;
       const Quat frame = carrier(at, i, level);
@@ -367,6 +454,7 @@ void transport_positions(
   Transport t(topology, base, vertices, users, same_once, scratch);
   t.find_seams();
   t.share_normals();
+  t.share_agreements();
   const std::size_t n = users.size();
   const std::size_t chunks = std::max<std::size_t>(1, (vertices.size() + grain - 1) / grain);
   scratch.chunk_energy.resize(chunks * n * n);

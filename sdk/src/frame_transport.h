@@ -80,6 +80,7 @@ struct TransportScratch {
   std::vector<std::uint32_t> seam_of;  ///< per listed vertex: its seam group or kNoSeam
   std::vector<std::uint32_t> table;    ///< open addressing by position: 1 + list index, 0 empty
   std::vector<Vec3d> seam_normal;      ///< per seam group: the sum of its members' normals
+  std::vector<double> seam_agreement;  ///< per seam group and diff: the least agreement
   std::vector<double> edge;            ///< per listed vertex: its mean edge length
   /// Per vertex: bit l set when a displacement there reads carrying level l (all clear
   /// between merges).

@@ -18,7 +18,7 @@ prints its table, and asserts on `full`:
   - every method the scorer ran produced a result.
 KNOWN_LIMITS lists the rule violations that are understood and documented in
 docs/merge-quality.md: they are printed on every run, and a known limit that no longer
-occurs is reported so the list stays true. Exits 0 when every other rule holds, 1 with one
+occurs is reported so the list stays true; KNOWN_STACK_BOUND keeps a looser bound on some. Exits 0 when every other rule holds, 1 with one
 message per violation otherwise, 77 (SKIP) when a cases directory or numpy is missing.
 """
 import os
@@ -44,7 +44,12 @@ KNOWN_LIMITS = {
     ("cast_plus_detail_torus", "stack"): "as the taper: a cast scales the height off the surface",
     ("four_artists_torus", "stack"): "as the taper: its regional cast scales the height",
     ("three_artists_mocap", "stack"): "as the taper: the grab's falloff shears the volume",
+    ("grab_plus_detail_house", "stack"):
+        "the grab crushes thin walls; off them full follows the tilted surface, as the taper",
 }
+# Known stack limits that must still stay within a looser factor of sum: what a fix bought.
+# The house: 3.3x sum before a fold stopped carrying details (docs/merge-quality.md).
+KNOWN_STACK_BOUND = {"grab_plus_detail_house": 2.0}
 
 
 def parse(table):
@@ -92,6 +97,10 @@ def check(results, cases):
             if v is not None and s is not None and not v <= STACK_FACTOR * s:
                 problems.append((case, "stack", "stacked ideal: full %.4f > %.1f x sum %.4f"
                                  % (v, STACK_FACTOR, s)))
+            bound = KNOWN_STACK_BOUND.get(case)
+            if v is not None and s is not None and bound and not v <= bound * s:
+                problems.append((case, "stack bound", "stacked ideal: full %.4f > %.1f x sum %.4f"
+                                 % (v, bound, s)))
         v = value(case, "full", "roughness")
         if v is not None and not v <= ROUGHNESS_LIMIT:
             problems.append((case, "roughness", "full roughness=%.3f > %.1f" % (v, ROUGHNESS_LIMIT)))

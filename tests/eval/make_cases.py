@@ -1,5 +1,5 @@
 # Builds merge cases from edits authored by Blender's own deformers.
-# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2]
+# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|house]
 # (Debian 12: apt-get install blender assimp-testmodels). Add your own case() lines to author more.
 # public, public2: the sets of shared/eval/cases (this file began as shared/eval/make_cases.py);
 # held: tests/eval/cases (see its README.md), which also prints what each case holds;
@@ -260,6 +260,10 @@ def held_object(kind):
         normalised(o)
     elif kind == "engine_shipped":
         o = engine_end(); normalised(o)
+    elif kind in ("house", "house_shipped"):  # regr01.obj: a house of 275 pieces (32 welded)
+        o = imported(bpy.ops.import_scene.obj, obj_vertex_count(M + "OBJ/regr01.obj"), filepath=M + "OBJ/regr01.obj")
+        normalised(o)
+        if kind == "house": subdivided(o, 1)  # each piece on its own: its large faces get vertices
     else:
         raise ValueError(kind)
     bpy.context.view_layer.objects.active = o; o.select_set(True)
@@ -311,11 +315,14 @@ def frame_ideal(o, d, faces, base, edited, is_detail, edits):
     displacement vector turned by the minimal rotation taking the base vertex normal to the
     deformed vertex normal. A detail keeps its height and its sideways motion and follows the
     surface, as multiresolution editing defines it. Details add up. On a mesh as it ships
-    (coincident vertices), the normals are those of the welded surface, so split copies of a
-    point stay together."""
+    (coincident vertices), a tangential detail turns with the normals of the welded surface, so
+    split copies of a point stay together; a Displace along the normal moved each copy along
+    its own piece's normal (it tears such seams open), so its height is re-applied the same way,
+    along each vertex's own deformed normal."""
     rep = coincident(base)
     welded = any(r != i for i, r in enumerate(rep))
-    normals = surface_normals(base, faces, rep) if welded else [v.normal.copy() for v in o.data.vertices]
+    own = [v.normal.copy() for v in o.data.vertices]
+    normals = surface_normals(base, faces, rep) if welded else own
     h = [0.0] * len(base)
     t = [mathutils.Vector((0, 0, 0)) for _ in base]
     for e, det, edit in zip(edited, is_detail, edits):
@@ -323,8 +330,8 @@ def frame_ideal(o, d, faces, base, edited, is_detail, edits):
         along = normal_detail(o, edit)
         for i, (p, q) in enumerate(zip(e, base)):
             dv = mathutils.Vector(p) - mathutils.Vector(q)
-            if along:  # a Displace moved it along a normal: its height is the length
-                h[i] += dv.length if dv.dot(normals[i]) >= 0 else -dv.length
+            if along:  # a Displace moved it along its own normal: its height is the length
+                h[i] += dv.length if dv.dot(own[i]) >= 0 else -dv.length
             else:
                 t[i] += dv
     for edit, det in zip(edits, is_detail):
@@ -333,8 +340,8 @@ def frame_ideal(o, d, faces, base, edited, is_detail, edits):
     if welded:
         co = [tuple(v.co) for v in me.vertices]
         dn = surface_normals(co, faces, rep)
-        vs = [tuple(mathutils.Vector(c) + x * n + n0.rotation_difference(n) @ ti)
-              for c, n, n0, x, ti in zip(co, dn, normals, h, t)]
+        vs = [tuple(mathutils.Vector(c) + x * v.normal + n0.rotation_difference(n) @ ti)
+              for c, v, n, n0, x, ti in zip(co, me.vertices, dn, normals, h, t)]
     else:
         vs = [tuple(v.co + x * v.normal + n0.rotation_difference(v.normal) @ ti)
               for v, n0, x, ti in zip(me.vertices, normals, h, t)]
@@ -376,7 +383,7 @@ def case(name, kind, edits, ideal=None, details=None):
         edits[0](o); write_ply(os.path.join(d, "ideal.ply"), evaluated_verts(o), faces)
     o.modifiers.clear()
     print("CASE", name, len(base), "vertices", len(faces), "faces")
-    if which not in ("held", "held2"): return
+    if which not in ("held", "held2", "held3", "house"): return
     # what the case holds, for the README: parts, split seams, each edit's size and folds
     rep = coincident(base)
     files = dict(zip("abcdefgh", edited)); files.update(results)
@@ -547,6 +554,32 @@ elif which == "held2":
          [lambda o: detail(o, (1, 0, 0.3), 0.3, 0.05, 53),
           lambda o: local_twist(o, (-1.3, 0, 0), (-1, 0, 0), 0.3, math.radians(60)),
           lambda o: simple(o, 'TWIST', math.radians(45), 'X')], "stack", details=[0, 1])
+elif which == "held3":
+    # regr01.obj, a house of 275 pieces (32 once welded), not welded: every piece subdivided
+    # on its own (its walls' large faces get vertices); the grab crushes thin walls, folding
+    # 127 faces. Set `house` holds it and four more on the house, scored but not kept in the
+    # repository for their size (docs/merge-quality.md).
+    case("grab_plus_detail_house", "house",
+         [lambda o: detail(o, at("+y"), 0.3, 0.04, 60),
+          lambda o: grab(o, at("+y"), at("+y", 1, (0.05, 0.15, 0.05)), 0.6)], "stack", details=[0])
+elif which == "house":
+    case("grab_plus_detail_house", "house",
+         [lambda o: detail(o, at("+y"), 0.3, 0.04, 60),
+          lambda o: grab(o, at("+y"), at("+y", 1, (0.05, 0.15, 0.05)), 0.6)], "stack", details=[0])
+    case("cast_plus_detail_house", "house",
+         [lambda o: detail(o, near(o, (-0.3, 0.2, 0.0))[0], 0.3, 0.04, 61),
+          lambda o: cast(o, 0.4)], "stack", details=[0])
+    case("disjoint_house", "house",
+         [lambda o: detail(o, near(o, (-0.6, 0.2, -0.3))[0], 0.3, 0.04, 62),
+          lambda o: grab(o, near(o, (0.0, 0.2, 0.6))[0], plus(near(o, (0.0, 0.2, 0.6))[0], (0, 0.12, 0.05)), 0.4)],
+         "stack", details=[0])
+    case("three_artists_house", "house",
+         [lambda o: detail(o, near(o, (-0.6, 0.2, -0.3))[0], 0.3, 0.04, 63),
+          lambda o: tiny_grab(o, near(o, (-0.3, 0.2, 0.6))[0], (0.03, 0, 0.02), 0.25),
+          lambda o: simple(o, 'BEND', math.radians(60), 'X')], "stack", details=[0, 1])
+    case("grab_plus_detail_house_shipped", "house_shipped",
+         [lambda o: detail_along(o, at("+y"), 0.4, 0.05, 64, 'Y'),
+          lambda o: grab(o, at("+y"), at("+y", 1, (0.05, 0.15, 0.05)), 0.6)], "stack", details=[0])
 elif which == "probe":
     for kind in sys.argv[sys.argv.index("--") + 3:]:
         o = base_object(kind); base, faces = snapshot(o); rep = coincident(base)
