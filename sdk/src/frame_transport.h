@@ -33,6 +33,12 @@
 // - s_ij = max(0, 1 - |d_i - d_j| / (0.001 min(|d_i|, |d_j|)))^2 and c_j = sum_k s_jk count
 //   each intent once: identical edits come back once (idempotence), independent ones add, and
 //   two edits moving the same way by similar amounts (two inflates along one normal) are two.
+// - g_ij is scaled by how well the faces around v agree on how diff i turns the surface (the
+//   length of the mean of their turns as unit quaternions: 1 for one turn, however large):
+//   full up to a spread of 30 degrees, none from 90 (a fold between them). Where a grab
+//   crushes a thin part, some faces flip beside others that do not, and the averaged rotation
+//   is no frame: a detail turned by it landed 3.3x addition's error from the stacked ideal
+//   on a 275-piece house. A bend's or twist's faces turn alike and carry as before.
 // - Coincident vertices that are not connected (split seams) share one rotation per diff,
 //   so a seam that the artists moved together stays closed.
 // Products and sums run in the canonical order of the diffs, per vertex in double, and the
