@@ -68,6 +68,11 @@ class LookDigest {
     for (const char c : text) add(c);
     add(text.size());
   }
+  template <typename T, typename... More>
+  void add(const T& first, const More&... more) {
+    add(first);
+    add(more...);
+  }
   uint64_t value() const { return h_; }
 
  private:
@@ -78,32 +83,15 @@ class LookDigest {
 
 uint64_t SessionLink::look() const {
   LookDigest d;
-  d.add(joined_);
-  d.add(view_.id);
-  d.add(view_.version);
-  d.add(status_);
-  d.add(messages_.size());
+  d.add(joined_, view_.id, view_.version, status_, messages_.size());
   if (!messages_.empty()) d.add(messages_.back());
   const csc_session_stats& s = view_.stats;
   for (const uint64_t counter : {s.merger, s.epoch, uint64_t{s.members}, s.strokes_submitted,
                                  s.strokes_acknowledged, s.merges})
     d.add(counter);
-  for (const Peer& p : view_.peers) {
-    d.add(p.id);
-    d.add(p.state);
-    d.add(p.name);
-    d.add(p.merger);
-    d.add(p.version);
-  }
-  for (const Cursor& c : view_.cursors) {
-    d.add(c.peer);
-    d.add(c.position);
-    d.add(c.radius);
-    d.add(c.active);
-    d.add(c.colour);
-  }
-  d.add(view_.undo_depth);
-  d.add(view_.redo_depth);
+  for (const Peer& p : view_.peers) d.add(p.id, p.state, p.name, p.merger, p.version);
+  for (const Cursor& c : view_.cursors) d.add(c.peer, c.position, c.radius, c.active, c.colour);
+  d.add(view_.undo_depth, view_.redo_depth);
   return d.value();
 }
 
