@@ -7,12 +7,8 @@
 # frame_ms_max figures cover "a merge, a rebase, a late join or a failover".
 #   tools/app_bench_session.sh APP CSCULPT [FRAMES] [FACES]
 set -euo pipefail
-if [ "${1:-}" != --inside ]; then
-  exec xvfb-run -a -s "-screen 0 1280x800x24 -nolisten tcp" "$0" --inside "$@"
-fi
+. "$(dirname "$0")/under_xvfb.sh" 1280x800x24 "$@"
 app=$2 cli=$3 frames=${4:-200} faces=${5:-320000}
-work=$(mktemp -d)
-trap 'kill $(jobs -p) 2>/dev/null || true; rm -rf "$work"' EXIT
 mkfifo "$work/out"
 # The first seconds untimed: the three joins (snapshots of the mesh) land first.
 "$app" --host --sphere-faces "$faces" --bench-frames "$frames" --bench-warmup 4 > "$work/out" &

@@ -5,12 +5,8 @@
 # session's version when it quit, and the three peers' CPU seconds.
 #   tools/app_idle_session.sh APP CSCULPT [SECONDS] [FACES]
 set -euo pipefail
-if [ "${1:-}" != --inside ]; then
-  exec xvfb-run -a -s "-screen 0 1280x800x24 -nolisten tcp" "$0" --inside "$@"
-fi
+. "$(dirname "$0")/under_xvfb.sh" 1280x800x24 "$@"
 app=$2 cli=$3 seconds=${4:-20} faces=${5:-320000}
-work=$(mktemp -d)
-trap 'kill $(jobs -p) 2>/dev/null || true; rm -rf "$work"' EXIT
 mkfifo "$work/out"
 CSCULPT_APP_COUNT_FRAMES=1 /usr/bin/time -f "%U %S" -o "$work/app_time" \
   "$app" --host --sphere-faces "$faces" --exit-after "$seconds" > "$work/out" 2>/dev/null &

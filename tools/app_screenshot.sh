@@ -5,12 +5,8 @@
 # same sphere, then shows who edited where (the attribution view). Runs under its own Xvfb;
 # needs xvfb-run, xdotool and ImageMagick's `import` (.ci/install-deps installs them).
 set -euo pipefail
-if [ "${1:-}" != --inside ]; then
-  exec xvfb-run -a -s "-screen 0 2000x720x24 -nolisten tcp" "$0" --inside "$@"
-fi
+. "$(dirname "$0")/under_xvfb.sh" 2000x720x24 "$@"
 app=$2 out=$3
-work=$(mktemp -d)
-trap 'kill $(jobs -p) 2>/dev/null || true; rm -rf "$work"' EXIT
 
 drag() {  # drag X0 Y0 X1 Y1: sixteen cursor steps, one per frame
   echo "move $1 $2"; echo "wait 1"; echo "press left"
