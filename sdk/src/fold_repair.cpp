@@ -54,6 +54,11 @@ constexpr Phase kPhases[] = {
 constexpr int kRelaxSweeps = 2;
 constexpr double kRelaxRate = 0.5;
 
+/// A part's dominant diff is a coarse edit under a detail when it moves the part this many
+/// times more (in squared displacement) than all the others together: the relax phase then
+/// smooths only what the others add and leaves it as it is.
+constexpr double kKeepRatio = 100.0;
+
 struct Repair {
   const Topology& topology;
   std::span<const Vec3f> base;
@@ -62,6 +67,7 @@ struct Repair {
   std::span<const std::uint32_t> seam_of;
   std::span<Vec3f> moved;
   FoldRepairScratch& s;
+  std::span<const double> carrying;
 
   Vec3d position(std::uint32_t v) const {
     const std::uint32_t i = s.slot[v];
@@ -211,6 +217,7 @@ struct Repair {
   void choose_dominant_diffs() {
     for (std::uint32_t i : s.region) s.part[i] = kNone;
     s.dominant.clear();
+    s.keeps.clear();
     for (std::uint32_t start : s.region) {
       if (s.part[start] != kNone) continue;
       const auto part = static_cast<std::uint32_t>(s.dominant.size());
@@ -230,7 +237,23 @@ struct Repair {
       }
       const auto best = std::max_element(s.energy.begin(), s.energy.end()) - s.energy.begin();
       s.dominant.push_back(static_cast<std::uint32_t>(best));
+      s.keeps.push_back(keeps_dominant(static_cast<std::size_t>(best)) ? 1 : 0);
     }
+  }
+
+  /// Whether the part just measured (`s.energy`) keeps diff `best` through the relax phase:
+  /// it carried every other diff moving the part in the transport (a coarse edit under
+  /// details), and moves the part kKeepRatio times more than all of them together.
+  bool keeps_dominant(std::size_t best) const {
+    const std::size_t n = diffs.size();
+    if (carrying.size() != n * n) return false;
+    double others = 0;
+    for (std::size_t j = 0; j < n; ++j) {
+      if (j == best || !(s.energy[j] > 0)) continue;
+      if (carrying[best * n + j] < 0.5) return false;
+      others += s.energy[j];
+    }
+    return s.energy[best] >= kKeepRatio * others;
   }
 
   void add_displacement_energy(std::uint32_t v) {
@@ -264,13 +287,20 @@ struct Repair {
 
   Vec3d displacement(std::uint32_t v) const { return sub(position(v), widen(base[v])); }
 
-  /// The mean displacement of `v`'s neighbours (an unmoved one counts as zero), or `v`'s own
+  /// What the relax phase smooths at `v`: its displacement, less diff `keep`'s there when
+  /// the part keeps its dominant edit (kNone: nothing kept).
+  Vec3d residual(std::uint32_t v, std::uint32_t keep) const {
+    if (keep == kNone) return displacement(v);
+    return sub(position(v), position_after(base, *diffs[keep], v));
+  }
+
+  /// The mean residual of `v`'s neighbours (an unmoved one counts as zero), or `v`'s own
   /// when it has none.
-  Vec3d neighbours_mean(std::uint32_t v) const {
+  Vec3d neighbours_mean(std::uint32_t v, std::uint32_t keep) const {
     const auto row = topology.vertex_vertices.row(v);
-    if (row.empty()) return displacement(v);
+    if (row.empty()) return residual(v, keep);
     Vec3d mean{0, 0, 0};
-    for (std::uint32_t u : row) mean = add(mean, displacement(u));
+    for (std::uint32_t u : row) mean = add(mean, residual(u, keep));
     return scale(mean, 1.0 / double(row.size()));
   }
 
@@ -284,8 +314,11 @@ struct Repair {
         const std::uint32_t i = s.region[r];
         const double x = double(phase.rings + 1 - s.ring[i]) / double(phase.rings + 1);
         const double fade = x * x * (3 - 2 * x);
-        const Vec3d d = displacement(vertices[i]);
-        s.relaxed[r] = add(d, scale(sub(neighbours_mean(vertices[i]), d), kRelaxRate * fade));
+        const std::uint32_t part = s.part[i];
+        const std::uint32_t keep = s.keeps[part] ? s.dominant[part] : kNone;
+        const Vec3d d = displacement(vertices[i]), own = residual(vertices[i], keep);
+        s.relaxed[r] =
+            add(d, scale(sub(neighbours_mean(vertices[i], keep), own), kRelaxRate * fade));
       }
       for (std::size_t r = 0; r < s.region.size(); ++r) {
         const std::uint32_t i = s.region[r];
@@ -302,6 +335,7 @@ struct Repair {
       seed_folded_faces();
       grow_region(phase.rings);
       if (phase.remedy == Remedy::relax) {
+        choose_dominant_diffs();
         relax(phase);
       } else {
         if (phase.remedy == Remedy::dominant) choose_dominant_diffs();
@@ -328,11 +362,12 @@ std::uint32_t repair_new_folds(const Topology& topology, std::span<const Vec3f> 
                                std::span<const std::uint32_t> vertices,
                                std::span<const Diff* const> diffs,
                                std::span<const std::uint32_t> seam_of, std::span<Vec3f> moved,
-                               FoldRepairScratch& scratch, WorkerPool& pool, std::size_t grain) {
+                               FoldRepairScratch& scratch, WorkerPool& pool, std::size_t grain,
+                               std::span<const double> carrying) {
   if (scratch.slot.size() != topology.vertex_count)
     scratch.slot.assign(topology.vertex_count, kNone);
   for (std::uint32_t i = 0; i < vertices.size(); ++i) scratch.slot[vertices[i]] = i;
-  Repair r{topology, base, vertices, diffs, seam_of, moved, scratch};
+  Repair r{topology, base, vertices, diffs, seam_of, moved, scratch, carrying};
   r.collect_all_folds(pool, grain);
   const auto found = static_cast<std::uint32_t>(scratch.folds.size());
   if (found > 0) {

@@ -36,6 +36,7 @@ struct FoldRepairScratch {
   std::vector<std::uint32_t> ring;      ///< per moved vertex: rings from the nearest seed, or kNone
   std::vector<std::uint32_t> part;      ///< per moved vertex in the region: its connected part
   std::vector<std::uint32_t> dominant;  ///< per part: the diff moving it most
+  std::vector<std::uint8_t> keeps;      ///< per part: that diff is kept by the relax phase
   std::vector<double> energy;           ///< per diff: squared displacement over one part
   std::vector<std::uint32_t> region, frontier, next;
   std::vector<Vec3f> start;    ///< per moved vertex: its position when the current phase began
@@ -50,11 +51,14 @@ struct FoldRepairScratch {
 /// `seam_of` (empty, or one per vertex of the list) numbers the groups of vertices at one base
 /// position (split seams; kNone when alone): a group the merge left closed stays closed. Returns
 /// the number of new folds found before the repair. The search for them runs over `pool` in
-/// chunks of `grain`; the repair itself, rare and local, on the calling thread.
+/// chunks of `grain`; the repair itself, rare and local, on the calling thread. `carrying`
+/// (empty, or diffs x diffs: how much diff i's frame carried diff j, the transport's w_ij)
+/// lets the smoothing keep a coarse edit that carried the details folding on it.
 std::uint32_t repair_new_folds(const Topology& topology, std::span<const Vec3f> base,
                                std::span<const std::uint32_t> vertices,
                                std::span<const Diff* const> diffs,
                                std::span<const std::uint32_t> seam_of, std::span<Vec3f> moved,
-                               FoldRepairScratch& scratch, WorkerPool& pool, std::size_t grain);
+                               FoldRepairScratch& scratch, WorkerPool& pool, std::size_t grain,
+                               std::span<const double> carrying = {});
 
 }  // namespace csculpt::detail

@@ -1173,7 +1173,7 @@ void Merger::Pass::repair_folds(std::span<const std::uint32_t> changed, std::spa
   for (std::uint32_t u = 0; u < users; ++u) ordered[u] = diffs[order[u]];
   timings.new_folds_repaired += detail::repair_new_folds(
       hierarchy.topology(), base.positions, changed, std::span(ordered.data(), users),
-      ws.transport.seam_of, moved, ws.fold_repair, ws.pool, kBlendGrain);
+      ws.transport.seam_of, moved, ws.fold_repair, ws.pool, kBlendGrain, ws.transport.weight);
   timings.fold_repair_ms += ms_since(t0);
 }
 

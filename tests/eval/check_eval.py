@@ -18,7 +18,7 @@ prints its table, and asserts on `full`:
   - every method the scorer ran produced a result.
 KNOWN_LIMITS lists the rule violations that are understood and documented in
 docs/merge-quality.md: they are printed on every run, and a known limit that no longer
-occurs is reported so the list stays true; KNOWN_STACK_BOUND keeps a looser bound on some. Exits 0 when every other rule holds, 1 with one
+occurs is reported so the list stays true; KNOWN_BOUNDS keeps a looser bound on some. Exits 0 when every other rule holds, 1 with one
 message per violation otherwise, 77 (SKIP) when a cases directory or numpy is missing.
 """
 import os
@@ -46,10 +46,15 @@ KNOWN_LIMITS = {
     ("three_artists_mocap", "stack"): "as the taper: the grab's falloff shears the volume",
     ("grab_plus_detail_house", "stack"):
         "the grab crushes thin walls; off them full follows the tilted surface, as the taper",
+    ("bend_plus_crumpling_detail_mocap", "frame"):
+        "the detail folds 330 faces itself; the fold repair smooths it where it folds anew",
+    ("bend_plus_crumpling_detail_mocap", "artist"): "the same, on the detail's own support",
 }
-# Known stack limits that must still stay within a looser factor of sum: what a fix bought.
-# The house: 3.3x sum before a fold stopped carrying details (docs/merge-quality.md).
-KNOWN_STACK_BOUND = {"grab_plus_detail_house": 2.0}
+# Known limits that must still hold a looser factor of sum: what a fix bought (see
+# docs/merge-quality.md). The house: 3.3x sum against the stack before a fold stopped carrying
+# details; the crumpling detail: 2.76x against the frame before the repair kept the bend.
+KNOWN_BOUNDS = {("grab_plus_detail_house", "stack"): 2.0,
+                ("bend_plus_crumpling_detail_mocap", "frame"): 1.1}
 
 
 def parse(table):
@@ -93,11 +98,15 @@ def check(results, cases):
                 if v is not None and b is not None and not v < b:
                     problems.append((case, "frame", "frame ideal: full %.4f is not below %s %.4f"
                                      % (v, baseline, b)))
+            bound, s = KNOWN_BOUNDS.get((case, "frame")), value(case + "/frame", "(sum)", "rel_err")
+            if v is not None and s is not None and bound and not v <= bound * s:
+                problems.append((case, "frame bound", "frame ideal: full %.4f > %.1f x sum %.4f"
+                                 % (v, bound, s)))
             v, s = value(case, "full", "rel_err"), value(case, "(sum)", "rel_err")
             if v is not None and s is not None and not v <= STACK_FACTOR * s:
                 problems.append((case, "stack", "stacked ideal: full %.4f > %.1f x sum %.4f"
                                  % (v, STACK_FACTOR, s)))
-            bound = KNOWN_STACK_BOUND.get(case)
+            bound = KNOWN_BOUNDS.get((case, "stack"))
             if v is not None and s is not None and bound and not v <= bound * s:
                 problems.append((case, "stack bound", "stacked ideal: full %.4f > %.1f x sum %.4f"
                                  % (v, bound, s)))

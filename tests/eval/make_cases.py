@@ -1,5 +1,5 @@
 # Builds merge cases from edits authored by Blender's own deformers.
-# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|house]
+# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|house|extra]
 # (Debian 12: apt-get install blender assimp-testmodels). Add your own case() lines to author more.
 # public, public2: the sets of shared/eval/cases (this file began as shared/eval/make_cases.py);
 # held: tests/eval/cases (see its README.md), which also prints what each case holds;
@@ -383,7 +383,7 @@ def case(name, kind, edits, ideal=None, details=None):
         edits[0](o); write_ply(os.path.join(d, "ideal.ply"), evaluated_verts(o), faces)
     o.modifiers.clear()
     print("CASE", name, len(base), "vertices", len(faces), "faces")
-    if which not in ("held", "held2", "held3", "house"): return
+    if which not in ("held", "held2", "held3", "house", "extra"): return
     # what the case holds, for the README: parts, split seams, each edit's size and folds
     rep = coincident(base)
     files = dict(zip("abcdefgh", edited)); files.update(results)
@@ -562,6 +562,11 @@ elif which == "held3":
     case("grab_plus_detail_house", "house",
          [lambda o: detail(o, at("+y"), 0.3, 0.04, 60),
           lambda o: grab(o, at("+y"), at("+y", 1, (0.05, 0.15, 0.05)), 0.6)], "stack", details=[0])
+    # a detail that crumples the mocap figure's fine head faces (it folds 330 of them itself),
+    # bent 120 degrees with the whole figure: the fold repair's smoothing drifted the bend
+    case("bend_plus_crumpling_detail_mocap", "mocap",
+         [lambda o: detail(o, at("+z"), 0.3, 0.1, 73),
+          lambda o: bend(o, math.radians(120), 'X')], "stack", details=[0])
 elif which == "house":
     case("grab_plus_detail_house", "house",
          [lambda o: detail(o, at("+y"), 0.3, 0.04, 60),
@@ -580,6 +585,22 @@ elif which == "house":
     case("grab_plus_detail_house_shipped", "house_shipped",
          [lambda o: detail_along(o, at("+y"), 0.4, 0.05, 64, 'Y'),
           lambda o: grab(o, at("+y"), at("+y", 1, (0.05, 0.15, 0.05)), 0.6)], "stack", details=[0])
+elif which == "extra":
+    # more pairings on the many-part meshes, scored by hand and not kept (size): disjoint
+    # edits on the scan, welded and as it ships; a Cast on the mocap figure; a strong grab
+    # over a detail on the shipped scan
+    case("disjoint_wuson", "wuson",
+         [lambda o: detail(o, at("+y"), 0.25, 0.04, 70),
+          lambda o: grab(o, at("-y"), at("-y", 1, (0, -0.1, 0.1)), 0.35)], "stack", details=[0])
+    case("disjoint_wuson_shipped", "wuson_shipped",
+         [lambda o: detail_along(o, at("+z"), 0.25, 0.04, 71, 'Z'),
+          lambda o: grab(o, at("-z"), at("-z", 1, (0.1, 0, -0.1)), 0.35)], "stack", details=[0])
+    case("cast_plus_detail_mocap", "mocap",
+         [lambda o: detail(o, at("+x"), 0.3, 0.04, 72),
+          lambda o: cast(o, 0.4)], "stack", details=[0])
+    case("grab_plus_detail_wuson_shipped", "wuson_shipped",
+         [lambda o: detail_along(o, at("+y"), 0.3, 0.05, 74, 'Y'),
+          lambda o: grab(o, at("+y"), at("+y", 1, (0.1, 0.2, 0.1)), 0.5)], "stack", details=[0])
 elif which == "probe":
     for kind in sys.argv[sys.argv.index("--") + 3:]:
         o = base_object(kind); base, faces = snapshot(o); rep = coincident(base)
