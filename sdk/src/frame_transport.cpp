@@ -14,11 +14,12 @@ constexpr std::uint32_t kNoSeam = 0xffffffffu;
 /// trusted as a frame, and the spread (a fold between faces) from which it is not at all.
 constexpr double kSmoothSpread = 30.0 * 3.14159265358979323846 / 180.0;
 constexpr double kFoldSpread = 90.0 * 3.14159265358979323846 / 180.0;
+constexpr std::size_t kMaxUsers = 64;
 
+/// A quaternion in double, for the faces' turns summed around a vertex.
 struct Vec4d {
   double w = 0, x = 0, y = 0, z = 0;
 };
-constexpr std::size_t kMaxUsers = 64;
 
 bool has(const std::uint64_t* bits, std::uint32_t v) {
   return (bits[v >> 6] >> (v & 63) & 1) != 0;
