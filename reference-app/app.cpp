@@ -141,9 +141,34 @@ void App::open_start_mesh() {
   if (!error.empty()) report(error + " (showing the built-in sphere)");
 }
 
-// After the document got new arrays (open, join): everything derived from them is rebuilt.
+// The joined session's mesh, prepared off this thread (mesh_preparation.h), replaces the
+// document; the session becomes active. What is left here is the upload.
+void App::finish_join() {
+  std::string error;
+  const auto start = std::chrono::steady_clock::now();
+  const bool ok = preparing_->take(document_, bvh_, error);
+  preparing_.reset();
+  if (!ok) {
+    report(error);
+    session_.leave();
+    return;
+  }
+  arrays_changed();
+  session_.adopted();
+  join_ms_ =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+// After the document got new arrays (open, the built-in sphere): everything derived from
+// them is rebuilt.
 void App::layout_changed() {
   bvh_.build(document_.positions, document_.triangles);
+  arrays_changed();
+}
+
+// What derives from the document's arrays but the BVH: strokes, undo, the GPU's copy, the
+// camera's framing.
+void App::arrays_changed() {
   sculptor_.reset();
   history_.reset(document_);
   renderer_.upload_all(document_);
@@ -228,16 +253,9 @@ void App::session_tick() {
     std::string error;
     const int joined = session_.poll_join(error);
     if (joined < 0) report(error);
-    if (joined > 0) {
-      std::unique_ptr<csc_mesh, MeshDeleter> base(session_.take_joined_mesh());
-      if (!base || !document_.adopt(base.get(), "session mesh", error)) {
-        report(error.empty() ? "cannot take the session's mesh" : error);
-        session_.leave();
-      } else {
-        layout_changed();
-      }
-    }
+    if (joined > 0) preparing_ = std::make_unique<MeshPreparation>(session_.take_joined_mesh());
   }
+  if (preparing_ && preparing_->ready()) finish_join();
   if (!session_.active()) return;
   session_.poll_events();
   // What the session shows changed (a version, a peer, a cursor, a message): draw it once;
@@ -366,13 +384,13 @@ void App::finish() {
     std::printf(
         "SESSION id=%016llx merger=%016llx version=%llu members=%u submitted=%llu "
         "acknowledged=%llu "
-        "presence=%zu peers=%s\n",
+        "presence=%zu peers=%s join_ms=%.1f\n",
         static_cast<unsigned long long>(session_.id()),
         static_cast<unsigned long long>(stats.merger),
         static_cast<unsigned long long>(session_.version()), stats.members,
         static_cast<unsigned long long>(stats.strokes_submitted),
         static_cast<unsigned long long>(stats.strokes_acknowledged), session_.presence_seen(),
-        names.c_str());
+        names.c_str(), join_ms_);
     std::fflush(stdout);
   }
   session_.leave();

@@ -8,6 +8,7 @@
 #include <glm/vec3.hpp>
 
 #include <array>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,7 @@
 #include "draw_schedule.h"
 #include "input.h"
 #include "mesh_document.h"
+#include "mesh_preparation.h"
 #include "options.h"
 #include "renderer.h"
 #include "replay.h"
@@ -58,6 +60,8 @@ class App final : public InputHandlers {
   bool open_window();
   void open_start_mesh();
   void layout_changed();
+  void arrays_changed();
+  void finish_join();
   bool frame();
   bool busy() const;
   bool should_quit() const;
@@ -109,6 +113,8 @@ class App final : public InputHandlers {
   ViewSettings view_;
   ReplayPlayer replay_;
   SessionLink session_;
+  std::unique_ptr<MeshPreparation> preparing_;  // a joined mesh being made ready
+  double join_ms_ = 0;  // what taking the joined mesh cost the UI thread (SESSION line)
   TabletPressure tablet_;
   std::string tablet_status_;  // shown beside the pressure settings
 

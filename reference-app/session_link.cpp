@@ -28,11 +28,12 @@ bool SessionLink::host(const csc_mesh* mesh, MeshArrays arrays, const std::strin
 void SessionLink::begin_join(const std::string& invite, const std::string& name) {
   worker_ = std::make_unique<SessionWorker>(invite, name);
   joined_ = false;
+  adopting_ = false;
   status_ = "joining...";
 }
 
 int SessionLink::poll_join(std::string& error) {
-  if (!worker_ || joined_) return 0;
+  if (!worker_ || joined_ || adopting_) return 0;
   const int state = worker_->state(error);
   if (state < 0) {
     worker_.reset();
@@ -40,10 +41,17 @@ int SessionLink::poll_join(std::string& error) {
     note(error);
   }
   if (state > 0) {
-    joined_ = true;
-    status_ = "joined";
+    adopting_ = true;
+    status_ = "preparing the session's mesh...";
   }
   return state;
+}
+
+void SessionLink::adopted() {
+  if (!worker_ || !adopting_) return;
+  adopting_ = false;
+  joined_ = true;
+  status_ = "joined";
 }
 
 void SessionLink::poll_events() {
@@ -121,6 +129,7 @@ void SessionLink::leave() {
   const bool was_active = joined_;
   worker_.reset();  // the worker sends what it has, tells the others and stops
   joined_ = false;
+  adopting_ = false;
   view_ = {};
   if (was_active) {
     status_ = "left the session";

@@ -27,11 +27,14 @@ class SessionLink {
   bool host(const csc_mesh* mesh, MeshArrays arrays, const std::string& name, std::string& error);
   /** Starts joining in the background as `name`; poll_join() tells when it is done. */
   void begin_join(const std::string& invite, const std::string& name);
-  /** While joining: 1 when the session is ready (take_joined_mesh() for the document), -1
-   *  when the join failed (`error`), 0 while still waiting. */
+  /** While joining: 1, once, when the session's mesh has come (take_joined_mesh() for the
+   *  document; the session is active once adopted() says the document holds it), -1 when the
+   *  join failed (`error`), 0 otherwise. */
   int poll_join(std::string& error);
   /** The session's mesh after a join (caller destroys). */
   csc_mesh* take_joined_mesh() { return worker_ ? worker_->take_joined_mesh() : nullptr; }
+  /** The app's document holds the joined mesh: from now on the session is active. */
+  void adopted();
   bool joining() const { return worker_ && !joined_; }
   bool active() const { return worker_ && joined_; }
 
@@ -73,6 +76,7 @@ class SessionLink {
 
   std::unique_ptr<SessionWorker> worker_;
   bool joined_ = false;
+  bool adopting_ = false;  // the mesh has come; the app is preparing its document
   SessionView view_;
   std::vector<std::string> notes_, messages_;  // the app's own; with the worker's
   std::string status_ = "not in a session";
