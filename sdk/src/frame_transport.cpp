@@ -422,6 +422,8 @@ Vec3f Transport::merged(std::size_t at) const {
   const Vec3f& b = base_[v];
   Vec3d sum{}, n{};
   bool have_normal = false;  // computed only where one edit carries another
+  std::array<double, kMaxUsers> agrees;  // per carrier, once it carries anything here
+  std::fill_n(agrees.begin(), n_, -1.0);
   for (std::size_t j = 0; j < n_; ++j) {
     if (!s.moves[j]) continue;
     double count = 1;
@@ -433,7 +435,8 @@ Vec3f Transport::merged(std::size_t at) const {
       if (i == j || !s.turns[i]) continue;
       double g = (1.0 - same(s, i, j)) * scratch_.weight[i * n_ + j];
       if (!(g > 0)) continue;
-      g *= agreement(at, i);
+      if (agrees[i] < 0) agrees[i] = agreement(at, i);
+      g *= agrees[i];
       if (!(g > 0)) continue;
       if (!have_normal) n = normal(at), have_normal = true;
       const Quat frame = carrier(at, i, level);
