@@ -304,8 +304,10 @@ bool App::frame() {
   if (const std::optional<float> pressure = tablet_.poll()) on_pressure(*pressure);
   if (replay_.active()) replay_.step(*this);
   const auto tick_start = std::chrono::steady_clock::now();
+  const double tick_cpu_start = benchmarking_frames_ ? thread_cpu_ms() : 0.0;
   session_tick();
   const auto tick_end = std::chrono::steady_clock::now();
+  if (benchmarking_frames_) session_cpu_ms_.push_back(thread_cpu_ms() - tick_cpu_start);
   if (attribution_view_ && !session_.active())
     toggle_attribution_view();  // left: real colours back
   if (attribution_view_ && attribution_dirty_) {

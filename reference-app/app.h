@@ -97,6 +97,7 @@ class App final : public InputHandlers {
   void draw_remote_cursors();
   // bench.cpp
   int run_bench();
+  static double thread_cpu_ms();  // the calling thread's CPU time
   /** One JSON line of the dab times measured since they were last cleared. */
   void print_dabs(const char* mode);
 
@@ -154,5 +155,8 @@ class App final : public InputHandlers {
   bool benchmarking_ = false;
   // Per timed frame: the session's calls with applying what they brought, and the upload.
   std::vector<double> session_ms_, upload_ms_;
+  // The UI thread's CPU time in the session's part of each frame: its own work, which a
+  // loaded machine's preemptions do not inflate (session_ms_ is wall time).
+  std::vector<double> session_cpu_ms_;
   bool benchmarking_frames_ = false;
 };

@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
+#include <numeric>
 #include <vector>
 
 #include "app.h"
@@ -19,6 +21,12 @@ double percentile(std::vector<double> values, double p) {
 }
 
 }  // namespace
+
+double App::thread_cpu_ms() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
+}
 
 void App::print_dabs(const char* mode) {
   std::printf(
@@ -39,6 +47,7 @@ int App::run_bench() {
   frame_ms.reserve(frames);
   dab_ms_.reserve(size_t{frames} * 16);
   session_ms_.reserve(frames);
+  session_cpu_ms_.reserve(frames);
   upload_ms_.reserve(frames);
   // In a session (--host / --join) the merged versions applied during the phase are counted:
   // the frames then include csc_session_update's rebase of the artist's arrays.
@@ -53,16 +62,20 @@ int App::run_bench() {
         ".3f,"
         "\"fps_p50\":%.2f,\"fps_p99\":%.2f,\"drawn_faces\":%u,\"session_members\":%u,"
         "\"versions_applied\":%llu,\"session_ms_p99\":%.3f,\"session_ms_max\":%.3f,"
+        "\"session_cpu_ms_p99\":%.3f,\"session_cpu_ms_max\":%.3f,\"session_cpu_ms_total\":%.1f,"
         "\"upload_ms_p99\":%.3f,\"upload_ms_max\":%.3f}\n",
         mode, document_.triangle_count(), document_.vertex_count(), width, height, frames, p50, p99,
         worst, 1000.0 / p50, 1000.0 / p99, renderer_.drawn_triangles_last(),
         session_.active() ? stats.members : 0u,
         static_cast<unsigned long long>(stats.versions_applied - versions_before),
-        percentile(session_ms_, 0.99), percentile(session_ms_, 1.0), percentile(upload_ms_, 0.99),
-        percentile(upload_ms_, 1.0));
+        percentile(session_ms_, 0.99), percentile(session_ms_, 1.0),
+        percentile(session_cpu_ms_, 0.99), percentile(session_cpu_ms_, 1.0),
+        std::accumulate(session_cpu_ms_.begin(), session_cpu_ms_.end(), 0.0),
+        percentile(upload_ms_, 0.99), percentile(upload_ms_, 1.0));
     std::fflush(stdout);
     versions_before = stats.versions_applied;
     session_ms_.clear();
+    session_cpu_ms_.clear();
     upload_ms_.clear();
   };
   auto timed_frame = [&] {
