@@ -236,15 +236,9 @@ void App::take_session_changes() {
   const std::shared_ptr<const MeshChanges> changes = session_.take_changes();
   if (!changes || changes->vertices.empty()) return;
   const uint32_t stride = document_.values_per_vertex();
-  bool moved = false;
-  for (size_t i = 0; i < changes->vertices.size(); ++i) {
-    const uint32_t v = changes->vertices[i];
-    const float* values = &changes->values[i * stride];
-    const float* p = &document_.positions[3 * size_t{v}];
-    moved = moved || p[0] != values[0] || p[1] != values[1] || p[2] != values[2];
-    document_.set_vertex_values(v, values);
-  }
-  sculptor_.refresh_after_change(changes->vertices, moved);
+  for (size_t i = 0; i < changes->vertices.size(); ++i)
+    document_.set_vertex_values(changes->vertices[i], &changes->values[i * stride]);
+  sculptor_.adopt_version(changes->vertices, changes->normals);
   attribution_dirty_ = true;
 }
 

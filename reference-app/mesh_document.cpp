@@ -195,6 +195,15 @@ void MeshDocument::recompute_normals(std::span<const uint32_t> vertices) {
   compute_vertex_normals(around, face_normals.data(), vertices, normals.data());
 }
 
+void MeshDocument::set_normals(std::span<const uint32_t> faces, std::span<const float> face_values,
+                               std::span<const uint32_t> vertices,
+                               std::span<const float> vertex_values) {
+  for (size_t i = 0; i < faces.size(); ++i)
+    std::copy_n(&face_values[3 * i], 3, &face_normals[3 * size_t{faces[i]}]);
+  for (size_t i = 0; i < vertices.size(); ++i)
+    std::copy_n(&vertex_values[3 * i], 3, &normals[3 * size_t{vertices[i]}]);
+}
+
 uint32_t MeshDocument::stale_normals() const {
   MeshDocument fresh;
   fresh.positions = positions;

@@ -53,6 +53,10 @@ class MeshDocument {
    *  redraws the same). Their triangles' face normals must be current. */
   void recompute_normals(std::span<const uint32_t> vertices);
   void recompute_all_normals();
+  /** Takes face normals of `faces` and vertex normals of `vertices` computed elsewhere from
+   *  the positions this document holds (3 floats each, in the lists' order). */
+  void set_normals(std::span<const uint32_t> faces, std::span<const float> face_values,
+                   std::span<const uint32_t> vertices, std::span<const float> vertex_values);
   /** Vertex and face normals that differ bitwise from what recomputing them all from the
    *  positions gives (0 when every path that moves vertices kept them current). */
   uint32_t stale_normals() const;

@@ -15,6 +15,7 @@
 #include "mesh_document.h"
 #include "side_task.h"
 #include "stroke_history.h"
+#include "version_normals.h"
 
 struct DabInput {
   glm::vec3 center;          // the hit point
@@ -43,6 +44,9 @@ class Sculptor {
   /** After positions (or only channels) of `vertices` changed outside a stroke (undo, a
    *  merged version): normals around them, BVH boxes, and the renderer's queue. */
   void refresh_after_change(std::span<const uint32_t> vertices, bool positions_changed);
+  /** The same for a session version whose values the document holds now: its normals were
+   *  computed by the session worker (`normals`), so only the BVH is refitted here. */
+  void adopt_version(std::span<const uint32_t> vertices, const ChangedNormals& normals);
   /** Vertices to re-upload (unique, unsorted); the renderer clears it. */
   std::vector<uint32_t>& dirty_vertices() { return dirty_; }
   void clear_dirty();

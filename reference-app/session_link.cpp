@@ -17,7 +17,10 @@ bool SessionLink::host(const csc_mesh* mesh, MeshArrays arrays, const std::strin
     error = std::string("cannot host a session: ") + csc_status_str(s) + ": " + csc_last_error();
     return false;
   }
-  worker_ = std::make_unique<SessionWorker>(session, std::move(arrays));
+  const uint32_t* corners = csc_mesh_triangles(mesh);
+  worker_ = std::make_unique<SessionWorker>(
+      session, std::move(arrays),
+      std::vector<uint32_t>(corners, corners + 3 * size_t{csc_mesh_triangle_count(mesh)}));
   joined_ = true;
   view_ = {};
   view_.invite = csc_session_invite(session);  // the worker owns the handle from now on

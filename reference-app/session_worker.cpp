@@ -112,8 +112,9 @@ MeshArrays MeshArrays::of(const csc_mesh* mesh) {
 
 // ---- SessionWorker: the UI thread's side ----------------------------------------------------
 
-SessionWorker::SessionWorker(csc_session* session, MeshArrays initial)
-    : session_(session), mirror_(std::move(initial)) {
+SessionWorker::SessionWorker(csc_session* session, MeshArrays initial,
+                             std::vector<uint32_t> triangles)
+    : session_(session), mirror_(std::move(initial)), host_triangles_(std::move(triangles)) {
   shown_ = mirror_;
   state_ = 1;
   local_view_.status = "hosting";
@@ -177,6 +178,7 @@ std::shared_ptr<const MeshChanges> SessionWorker::take_changes() {
   std::lock_guard lock(mutex_);
   if (!outbox_ || outbox_->includes < inbox_.handed || outbox_taken_) return {};
   outbox_taken_ = true;
+  ++takes_;
   // In line with the strokes: the worker learns what the document holds in the order it
   // changed (a stroke's after-values over an older take, never the other way round).
   inbox_.commands.push_back({Command::Kind::taken, {}, {}, {}, outbox_});
@@ -213,6 +215,7 @@ bool SessionWorker::attribution_colours(std::vector<float>& rgb) {
 
 void SessionWorker::run(std::string invite) {
   if (!invite.empty() && !join(invite)) return;
+  if (invite.empty()) normals_.set_topology(std::move(host_triangles_), mirror_.vertex_count());
   loop();
   finish();
 }
@@ -233,6 +236,9 @@ bool SessionWorker::join(const std::string& invite) {
   }
   session_ = session;
   mirror_ = MeshArrays::of(base);
+  const uint32_t* corners = csc_mesh_triangles(base);
+  normals_.set_topology({corners, corners + 3 * size_t{csc_mesh_triangle_count(base)}},
+                        mirror_.vertex_count());
   shown_ = mirror_;
   joined_mesh_ = base;
   local_view_.status = "joined";
@@ -266,6 +272,7 @@ void SessionWorker::drain_inbox() {
   const uint32_t stride = shown_.stride();
   for (const Command& c : in.commands) {
     if (c.kind == Command::Kind::taken) {
+      ++takes_drained_;
       for (size_t i = 0; i < c.changes->vertices.size(); ++i)
         shown_.write(c.changes->vertices[i], &c.changes->values[i * stride]);
       continue;
@@ -449,6 +456,11 @@ void SessionWorker::publish() {
     for (size_t i = 0; i < box->vertices.size(); ++i)
       mirror_.read(box->vertices[i], &box->values[i * stride]);
     box->includes = done_;
+    for (uint32_t v : box->vertices)
+      if (!std::equal(&mirror_.positions[3 * size_t{v}], &mirror_.positions[3 * size_t{v} + 3],
+                      &shown_.positions[3 * size_t{v}]))
+        box->normals.moved.push_back(v);
+    normals_.compute(mirror_.positions.data(), box->normals);
     dirty_ = false;
   }
   std::shared_ptr<std::vector<float>> colours;
@@ -464,6 +476,12 @@ void SessionWorker::publish() {
     attribution_stale_ = false;
   }
   std::lock_guard lock(mutex_);
+  // The UI took an outbox since the inbox was drained: `shown_` lacks it, so this box, made
+  // against `shown_`, could miss a vertex that box changed; it is made again after the drain.
+  if (box && takes_ != takes_drained_) {
+    box.reset();
+    dirty_ = true;
+  }
   if (box) {
     outbox_ = std::move(box);
     outbox_taken_ = false;

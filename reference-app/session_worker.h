@@ -24,6 +24,8 @@
 #include <thread>
 #include <vector>
 
+#include "version_normals.h"
+
 /** The arrays of a mesh as the app keeps them: positions, then each channel's values. */
 struct MeshArrays {
   std::vector<float> positions;
@@ -78,14 +80,15 @@ struct SessionView {
 struct MeshChanges {
   std::vector<uint32_t> vertices;
   std::vector<float> values;
-  uint64_t includes = 0;  // the UI's commands (strokes, undo, redo) the values include
+  uint64_t includes = 0;   // the UI's commands (strokes, undo, redo) the values include
+  ChangedNormals normals;  // what the moved vertices change of the normals
 };
 
 class SessionWorker {
  public:
   /** Starts on a session the UI created (hosting): `session` is handed over with `initial`,
-   *  the arrays it was created from. */
-  SessionWorker(csc_session* session, MeshArrays initial);
+   *  the arrays it was created from, and its triangles (3 corners each). */
+  SessionWorker(csc_session* session, MeshArrays initial, std::vector<uint32_t> triangles);
   /** Starts joining `invite` on the worker; joined() and take_joined_mesh() tell the result. */
   SessionWorker(std::string invite, std::string name);
   ~SessionWorker();  // leaves the session and stops the thread
@@ -141,10 +144,13 @@ class SessionWorker {
   // the worker's own state
   csc_session* session_ = nullptr;
   std::string name_;  // ours in the session (a joiner's; the host's went to csc_session_create)
-  MeshArrays mirror_, shown_;  // the session's side; what the UI's document holds
+  MeshArrays mirror_, shown_;             // the session's side; what the UI's document holds
+  std::vector<uint32_t> host_triangles_;  // until the thread builds normals_' topology
+  VersionNormals normals_;
   uint32_t strokes_unsent_ = 0;
   std::vector<uint32_t> unsent_vertices_;  // the strokes' since the last submit (may repeat)
   uint64_t done_ = 0;                      // strokes, undos and redos applied to the mirror
+  uint64_t takes_drained_ = 0;
   bool dirty_ = true, attribution_stale_ = true;
   std::chrono::steady_clock::time_point last_submit_{}, last_view_{};
   std::set<uint64_t> presence_seen_;
@@ -156,6 +162,7 @@ class SessionWorker {
   Inbox inbox_;
   std::shared_ptr<const MeshChanges> outbox_;
   bool outbox_taken_ = false;
+  uint64_t takes_ = 0;  // outboxes the UI took; the worker has drained takes_drained_ of them
   SessionView view_;
   int state_ = 0;
   std::string error_;
