@@ -47,15 +47,11 @@ KNOWN_LIMITS = {
     ("three_artists_mocap", "stack"): "as the taper: the grab's falloff shears the volume",
     ("grab_plus_detail_house", "stack"):
         "the grab crushes thin walls; off them full follows the tilted surface, as the taper",
-    ("bend_plus_crumpling_detail_mocap", "frame"):
-        "the detail folds 330 faces itself; the fold repair smooths it where it folds anew",
-    ("bend_plus_crumpling_detail_mocap", "artist"): "the same, on the detail's own support",
 }
 # Known limits that must still hold a looser factor of sum: what a fix bought (see
 # docs/merge-quality.md). The house: 3.3x sum against the stack before a fold stopped carrying
-# details; the crumpling detail: 2.76x against the frame before the repair kept the bend.
-KNOWN_BOUNDS = {("grab_plus_detail_house", "stack"): 2.0,
-                ("bend_plus_crumpling_detail_mocap", "frame"): 1.1}
+# details.
+KNOWN_BOUNDS = {("grab_plus_detail_house", "stack"): 2.0}
 
 
 def parse(table):
