@@ -1,5 +1,5 @@
 # Builds merge cases from edits authored by Blender's own deformers.
-# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|house|extra]
+# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|house|extra|crumple]
 # (Debian 12: apt-get install blender assimp-testmodels). Add your own case() lines to author more.
 # public, public2: the sets of shared/eval/cases (this file began as shared/eval/make_cases.py);
 # held: tests/eval/cases (see its README.md), which also prints what each case holds;
@@ -383,7 +383,7 @@ def case(name, kind, edits, ideal=None, details=None):
         edits[0](o); write_ply(os.path.join(d, "ideal.ply"), evaluated_verts(o), faces)
     o.modifiers.clear()
     print("CASE", name, len(base), "vertices", len(faces), "faces")
-    if which not in ("held", "held2", "held3", "house", "extra"): return
+    if which not in ("held", "held2", "held3", "house", "extra", "crumple"): return
     # what the case holds, for the README: parts, split seams, each edit's size and folds
     rep = coincident(base)
     files = dict(zip("abcdefgh", edited)); files.update(results)
@@ -571,6 +571,18 @@ elif which == "held3":
     case("bend_plus_crumpling_detail_mocap", "mocap",
          [lambda o: detail(o, at("+z"), 0.3, 0.1, 73),
           lambda o: bend(o, math.radians(120), 'X')], "stack", details=[0])
+elif which == "crumple":
+    # probes of the fold repair's exemption (a detail that folds faces itself, under a
+    # coarse edit that carries it), on meshes other than the mocap figure; scored by hand
+    case("twist_plus_crumpling_detail_wuson", "wuson",
+         [lambda o: detail(o, at("+y"), 0.3, 0.1, 80),
+          lambda o: simple(o, 'TWIST', math.radians(120), 'Y')], "stack", details=[0])
+    case("bend_plus_crumpling_detail_monkey", "monkey2",
+         [lambda o: detail(o, at("+z"), 0.35, 0.12, 81),
+          lambda o: bend(o, math.radians(120), 'X')], "stack", details=[0])
+    case("grab_plus_crumpling_detail_torus", "torus_lo",
+         [lambda o: detail(o, (1, 0, 0.3), 0.35, 0.12, 82),
+          lambda o: grab(o, (1, 0, 0.3), (1.3, 0.2, 0.6), 0.8)], "stack", details=[0])
 elif which == "house":
     house_grab_case()
     case("cast_plus_detail_house", "house",
