@@ -1,6 +1,6 @@
 // The normals a session version brings, computed on the session worker: a landing version
-// then costs the UI thread copies and the BVH's refit, not the geometry of tens of thousands
-// of triangles (under load that geometry alone took the UI 10-35 ms in one frame).
+// then costs the UI thread copies and the BVH's refit, not the geometry of the tens of
+// thousands of triangles around what moved (10-35 ms of one frame on a loaded machine).
 // surface_normals.h's functions over the same positions give the UI's bits exactly.
 #pragma once
 

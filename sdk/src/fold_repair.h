@@ -4,7 +4,10 @@
 // but where two strong edits overlap (a grab dragged over another artist's bump, a bend closed
 // on a detail) the combination can turn faces inside out although no artist's own edit did: a
 // visible crease or spike (folds.h has the definition every count uses). Such a face is
-// repaired where it appears: around its vertices the merged positions are drawn toward plain
+// repaired where it appears, unless the artists crumple the surface there themselves (plain
+// addition folds it too, under a coarse edit that carried the others, beside faces an
+// artist's own edit folds: the fold is their edits composed, and what is left is a subset of
+// addition's folds): around its vertices the merged positions are drawn toward plain
 // addition of the edits there (the frames that carried one edit into another undone); where
 // that still folds, the displacement field is smoothed; where even that folds (faces the base
 // already made slivers), the region is drawn toward the edit that moves it most. Each acts
