@@ -154,6 +154,7 @@ void App::finish_join() {
     return;
   }
   arrays_changed();
+  session_.hand_bvh(bvh_, document_.positions);
   session_.adopted();
   join_ms_ =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
@@ -195,6 +196,7 @@ void App::host_session() {
     return;
   }
   history_.reset(document_);  // undo of solo strokes would fight the session's versions
+  session_.hand_bvh(bvh_, document_.positions);
   std::printf("INVITE %s\n", session_.invite());
   std::fflush(stdout);
 }
@@ -238,7 +240,8 @@ void App::take_session_changes() {
   const uint32_t stride = document_.values_per_vertex();
   for (size_t i = 0; i < changes->vertices.size(); ++i)
     document_.set_vertex_values(changes->vertices[i], &changes->values[i * stride]);
-  sculptor_.adopt_version(changes->vertices, changes->normals);
+  sculptor_.adopt_version(changes->vertices, changes->normals, changes->bvh_nodes,
+                          changes->bvh_boxes);
   attribution_dirty_ = true;
 }
 
@@ -365,7 +368,8 @@ void App::finish() {
   // For the tests: the normals the brushes, undo and merged versions kept current must be the
   // bits a full recomputation gives (a stale one is a shading seam).
   if (std::getenv("CSCULPT_APP_CHECK_NORMALS"))
-    std::printf("NORMALS stale=%u\n", document_.stale_normals());
+    std::printf("NORMALS stale=%u bvh_loose=%u\n", document_.stale_normals(),
+                bvh_.loose_boxes(document_.positions, document_.triangles));
   if (std::getenv("CSCULPT_APP_COUNT_FRAMES"))  // for the tests: drawing on demand
     std::printf("FRAMES drawn=%llu seconds=%.2f\n", frames_drawn_, glfwGetTime() - start_time_);
   if (session_.active()) {  // for scripts: where this peer's session stood when it quit

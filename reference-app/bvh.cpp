@@ -49,7 +49,8 @@ void TriangleBvh::build(const std::vector<float>& positions,
   if (count > 0) build_node(positions, triangles, centroids, 0, count, kNone, 0);
   assign_vertices(triangles, positions.size() / 3);
   index_vertex_leaves(triangles, positions.size() / 3);
-  for (Marks* m : {&growing_marks_, &loose_marks_, &tighten_marks_}) m->resize(nodes_.size());
+  for (Marks* m : {&growing_marks_, &loose_marks_, &tighten_marks_, &listed_marks_})
+    m->resize(nodes_.size());
   loose_.clear();
 }
 
@@ -178,6 +179,39 @@ void TriangleBvh::refit_exactly(const std::vector<float>& positions,
     for (uint32_t k = vertex_leaves_begin_[v]; k < vertex_leaves_begin_[v + 1]; ++k)
       if (loose_marks_.mark(vertex_leaves_[k])) loose_.push_back(vertex_leaves_[k]);
   tighten(positions, triangles);
+}
+
+void TriangleBvh::boxes_around(std::span<const uint32_t> moved, std::vector<uint32_t>& nodes,
+                               std::vector<BvhBox>& boxes) {
+  nodes.clear();
+  boxes.clear();
+  for (uint32_t v : moved)
+    for (uint32_t k = vertex_leaves_begin_[v]; k < vertex_leaves_begin_[v + 1]; ++k)
+      for (uint32_t n = vertex_leaves_[k]; n != kNone && listed_marks_.mark(n); n = parent_[n]) {
+        nodes.push_back(n);
+        boxes.push_back(box(n));
+      }
+  listed_marks_.clear(nodes);
+}
+
+uint32_t TriangleBvh::loose_boxes(const std::vector<float>& positions,
+                                  const std::vector<uint32_t>& triangles) const {
+  TriangleBvh exact = *this;
+  std::vector<uint32_t> leaves;
+  for (uint32_t n = 0; n < nodes_.size(); ++n)
+    if (nodes_[n].count > 0) leaves.push_back(n);
+  exact.refit_leaves(positions, triangles, leaves);
+  uint32_t loose = 0;
+  for (uint32_t n = 0; n < nodes_.size(); ++n)
+    loose += nodes_[n].lo != exact.nodes_[n].lo || nodes_[n].hi != exact.nodes_[n].hi;
+  return loose;
+}
+
+void TriangleBvh::set_boxes(std::span<const uint32_t> nodes, std::span<const BvhBox> boxes) {
+  for (size_t i = 0; i < nodes.size(); ++i) {
+    nodes_[nodes[i]].lo = boxes[i].lo;
+    nodes_[nodes[i]].hi = boxes[i].hi;
+  }
 }
 
 void TriangleBvh::refit_leaves(const std::vector<float>& positions,

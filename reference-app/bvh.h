@@ -14,6 +14,11 @@
 
 #include "marks.h"
 
+/** A node's box, as another copy of the same tree hands it over. */
+struct BvhBox {
+  glm::vec3 lo, hi;
+};
+
 struct RayHit {
   bool hit = false;
   float distance = 0.f;
@@ -39,6 +44,19 @@ class TriangleBvh {
    *  a dab, the leaves its region query visited: every triangle around what moved). */
   void refit_leaves(const std::vector<float>& positions, const std::vector<uint32_t>& triangles,
                     std::span<const uint32_t> leaves);
+  /** Lists the leaves holding a triangle of each `moved` vertex and their ancestors, each
+   *  once, with their boxes (this tree must be tight): all that a copy of this tree, tight
+   *  over positions that differ from these at `moved` only, lacks to equal it. */
+  void boxes_around(std::span<const uint32_t> moved, std::vector<uint32_t>& nodes,
+                    std::vector<BvhBox>& boxes);
+  /** Takes boxes_around()'s result from a copy of this tree (the same build). */
+  void set_boxes(std::span<const uint32_t> nodes, std::span<const BvhBox> boxes);
+  /** Boxes that differ from an exact refit of every leaf over these positions (a check: 0
+   *  whenever no stroke is under way). */
+  uint32_t loose_boxes(const std::vector<float>& positions,
+                       const std::vector<uint32_t>& triangles) const;
+  /** Node n's box. */
+  BvhBox box(uint32_t n) const { return {nodes_[n].lo, nodes_[n].hi}; }
   /** The nearest triangle the ray crosses (either side). */
   RayHit raycast(const std::vector<float>& positions, const std::vector<uint32_t>& triangles,
                  glm::vec3 origin, glm::vec3 direction) const;
@@ -88,7 +106,7 @@ class TriangleBvh {
   std::vector<uint32_t> vertex_leaves_, vertex_leaves_begin_;
   // Scratch reused between refits: the leaves one refit grows, the leaves grown since the
   // last tighten (they and their ancestors may be loose), and tighten's nodes by depth.
-  Marks growing_marks_, loose_marks_, tighten_marks_;
+  Marks growing_marks_, loose_marks_, tighten_marks_, listed_marks_;
   std::vector<uint32_t> growing_, loose_, tightening_;
   std::vector<std::vector<uint32_t>> by_depth_;
   mutable std::vector<uint32_t> stack_;

@@ -271,18 +271,20 @@ void Sculptor::refresh_after_change(std::span<const uint32_t> vertices, bool pos
   side_.wait();
 }
 
-void Sculptor::adopt_version(std::span<const uint32_t> vertices, const ChangedNormals& normals) {
+void Sculptor::adopt_version(std::span<const uint32_t> vertices, const ChangedNormals& normals,
+                             std::span<const uint32_t> bvh_nodes,
+                             std::span<const BvhBox> bvh_boxes) {
   if (normals.moved.empty()) {
     refresh_after_change(vertices, false);
     return;
   }
-  side_.start([this, &normals] {
+  if (bvh_nodes.empty())
     bvh_.refit_exactly(document_.positions, document_.triangles, normals.moved);
-  });
+  else
+    bvh_.set_boxes(bvh_nodes, bvh_boxes);
   document_.set_normals(normals.triangles, normals.face_normals, normals.vertices, normals.normals);
   for (uint32_t v : normals.vertices) mark_dirty(v);
   for (uint32_t v : vertices) mark_dirty(v);  // channels may have changed where none moved
-  side_.wait();
 }
 
 void Sculptor::refresh(std::span<const uint32_t> vertices, bool positions_changed) {

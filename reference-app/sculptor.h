@@ -44,9 +44,11 @@ class Sculptor {
   /** After positions (or only channels) of `vertices` changed outside a stroke (undo, a
    *  merged version): normals around them, BVH boxes, and the renderer's queue. */
   void refresh_after_change(std::span<const uint32_t> vertices, bool positions_changed);
-  /** The same for a session version whose values the document holds now: its normals were
-   *  computed by the session worker (`normals`), so only the BVH is refitted here. */
-  void adopt_version(std::span<const uint32_t> vertices, const ChangedNormals& normals);
+  /** The same for a session version whose values the document holds now: its normals and
+   *  the BVH's boxes around what moved were computed by the session worker (no boxes: they
+   *  are refitted here). */
+  void adopt_version(std::span<const uint32_t> vertices, const ChangedNormals& normals,
+                     std::span<const uint32_t> bvh_nodes, std::span<const BvhBox> bvh_boxes);
   /** Vertices to re-upload (unique, unsorted); the renderer clears it. */
   std::vector<uint32_t>& dirty_vertices() { return dirty_; }
   void clear_dirty();

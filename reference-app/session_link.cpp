@@ -110,6 +110,10 @@ void SessionLink::set_presence(const csc_presence& presence) {
   if (active()) worker_->set_presence(presence);
 }
 
+void SessionLink::hand_bvh(const TriangleBvh& bvh, const std::vector<float>& positions) {
+  if (worker_) worker_->hand_bvh(bvh, positions);
+}
+
 void SessionLink::hand_stroke(const std::vector<uint32_t>& vertices,
                               const std::vector<float>& before, const std::vector<float>& after) {
   if (active()) worker_->hand_stroke(vertices, before, after);

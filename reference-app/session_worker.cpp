@@ -174,6 +174,12 @@ void SessionWorker::set_presence(const csc_presence& presence) {
   inbox_.presence = presence;
 }
 
+void SessionWorker::hand_bvh(TriangleBvh bvh, std::vector<float> positions) {
+  std::lock_guard lock(mutex_);
+  handed_bvh_ = std::make_unique<TriangleBvh>(std::move(bvh));
+  handed_bvh_positions_ = std::move(positions);
+}
+
 std::shared_ptr<const MeshChanges> SessionWorker::take_changes() {
   std::lock_guard lock(mutex_);
   if (!outbox_ || outbox_->includes < inbox_.handed || outbox_taken_) return {};
@@ -268,6 +274,11 @@ void SessionWorker::drain_inbox() {
     in.commands.swap(inbox_.commands);
     in.has_presence = std::exchange(inbox_.has_presence, false);
     in.presence = inbox_.presence;
+    if (handed_bvh_) {
+      bvh_ = std::move(*handed_bvh_);
+      bvh_positions_ = std::move(handed_bvh_positions_);
+      handed_bvh_.reset();
+    }
   }
   const uint32_t stride = shown_.stride();
   for (const Command& c : in.commands) {
@@ -461,6 +472,7 @@ void SessionWorker::publish() {
                       &shown_.positions[3 * size_t{v}]))
         box->normals.moved.push_back(v);
     normals_.compute(mirror_.positions.data(), box->normals);
+    add_bvh_boxes(*box);
     dirty_ = false;
   }
   std::shared_ptr<std::vector<float>> colours;
@@ -488,6 +500,28 @@ void SessionWorker::publish() {
   }
   if (colours) attribution_ = std::move(colours);
   view_ = local_view_;
+}
+
+void SessionWorker::add_bvh_boxes(MeshChanges& box) {
+  if (bvh_positions_.size() != mirror_.positions.size() || box.normals.moved.empty()) return;
+  // Tight over the mirror first: every vertex it moved since the last refit (strokes, undo,
+  // versions), block by block at memory speed as differing_vertices does.
+  constexpr uint32_t kBlock = 64;
+  const uint32_t n = mirror_.vertex_count();
+  stale_.clear();
+  for (uint32_t first = 0; first < n; first += kBlock) {
+    const size_t begin = 3 * size_t{first}, end = 3 * size_t{std::min(n, first + kBlock)};
+    if (std::equal(&mirror_.positions[begin], &mirror_.positions[0] + end, &bvh_positions_[begin]))
+      continue;
+    for (size_t v = first; 3 * v < end; ++v)
+      if (!std::equal(&mirror_.positions[3 * v], &mirror_.positions[3 * v + 3],
+                      &bvh_positions_[3 * v])) {
+        stale_.push_back(static_cast<uint32_t>(v));
+        std::copy_n(&mirror_.positions[3 * v], 3, &bvh_positions_[3 * v]);
+      }
+  }
+  bvh_.refit_exactly(mirror_.positions, normals_.corners(), stale_);
+  bvh_.boxes_around(box.normals.moved, box.bvh_nodes, box.bvh_boxes);
 }
 
 void SessionWorker::note(std::string message) {

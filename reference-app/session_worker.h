@@ -24,6 +24,7 @@
 #include <thread>
 #include <vector>
 
+#include "bvh.h"
 #include "version_normals.h"
 
 /** The arrays of a mesh as the app keeps them: positions, then each channel's values. */
@@ -82,6 +83,10 @@ struct MeshChanges {
   std::vector<float> values;
   uint64_t includes = 0;   // the UI's commands (strokes, undo, redo) the values include
   ChangedNormals normals;  // what the moved vertices change of the normals
+  // The BVH's boxes around the moved vertices, from the worker's copy of the UI's tree
+  // (empty until the worker has one: the UI then refits its own).
+  std::vector<uint32_t> bvh_nodes;
+  std::vector<BvhBox> bvh_boxes;
 };
 
 class SessionWorker {
@@ -105,6 +110,9 @@ class SessionWorker {
                    std::vector<float> after);
   void request_step(bool redo);
   void set_presence(const csc_presence& presence);
+  /** A copy of the UI's BVH, tight over `positions` (the document's when it was copied), so
+   *  the worker can hand over the boxes a version changes with the version. */
+  void hand_bvh(TriangleBvh bvh, std::vector<float> positions);
   /** The changes the UI lacks, if the mirror includes every command handed and they were not
    *  taken yet; else null. */
   std::shared_ptr<const MeshChanges> take_changes();
@@ -138,6 +146,8 @@ class SessionWorker {
   void sync();         // update and submit
   void refresh_view();
   void publish();
+  /** Refits the worker's BVH to the mirror and lists the boxes around `box`'s moved vertices. */
+  void add_bvh_boxes(MeshChanges& box);
   void note(std::string message);
   void finish();
 
@@ -147,6 +157,9 @@ class SessionWorker {
   MeshArrays mirror_, shown_;             // the session's side; what the UI's document holds
   std::vector<uint32_t> host_triangles_;  // until the thread builds normals_' topology
   VersionNormals normals_;
+  TriangleBvh bvh_;                   // the UI's tree, refitted to the mirror at each publish
+  std::vector<float> bvh_positions_;  // what bvh_ is tight over; empty until handed one
+  std::vector<uint32_t> stale_;       // vertices bvh_ is not tight over (scratch)
   uint32_t strokes_unsent_ = 0;
   std::vector<uint32_t> unsent_vertices_;  // the strokes' since the last submit (may repeat)
   uint64_t done_ = 0;                      // strokes, undos and redos applied to the mirror
@@ -162,6 +175,8 @@ class SessionWorker {
   Inbox inbox_;
   std::shared_ptr<const MeshChanges> outbox_;
   bool outbox_taken_ = false;
+  std::unique_ptr<TriangleBvh> handed_bvh_;
+  std::vector<float> handed_bvh_positions_;
   uint64_t takes_ = 0;  // outboxes the UI took; the worker has drained takes_drained_ of them
   SessionView view_;
   int state_ = 0;

@@ -26,6 +26,7 @@ class VersionNormals {
   /** Fills `out` for `out.moved` from `positions` (every vertex's, as the document will hold
    *  them once it has taken the version). */
   void compute(const float* positions, ChangedNormals& out);
+  const std::vector<uint32_t>& corners() const { return corners_; }
 
  private:
   std::vector<uint32_t> corners_;

@@ -13,13 +13,16 @@ APP = os.environ.get("CSCULPT_APP") or os.path.join(os.getcwd(), "csculpt-app")
 # A small sphere keeps the frames fast on llvmpipe; the brushes work the same at any size.
 TEST_SPHERE = ["--sphere-faces", "20000"]
 # Every app the tests start prints, on exit, how many of its vertex normals differ from a full
-# recomputation ("NORMALS stale=N"): the brushes, undo and the session worker keep them.
+# recomputation ("NORMALS stale=N"), and how many BVH boxes differ from an exact refit
+# ("bvh_loose=N"): the brushes, undo and the session worker keep both.
 os.environ["CSCULPT_APP_CHECK_NORMALS"] = "1"
 
 
 def assert_normals_current(test, stdout):
-    """The app's exit line says its normals are the bits a full recomputation gives."""
+    """The app's exit line says its normals are the bits a full recomputation gives, and its
+    BVH's boxes those an exact refit gives."""
     test.assertIn("NORMALS stale=0", stdout, "normals left stale (a shading seam)")
+    test.assertIn("bvh_loose=0", stdout, "BVH boxes not tight (the brush's hits and region)")
 
 
 def run_app(*args, timeout=60, check=True):

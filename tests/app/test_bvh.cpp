@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <set>
 #include <vector>
 
 #include "bvh.h"
@@ -118,3 +119,42 @@ TEST(AppBvh, QueriesAndRaysMatchBruteForceThroughGrownTightenedAndExactRefits) {
 }
 
 }  // namespace
+
+namespace {
+
+bool same_box(const BvhBox& a, const BvhBox& b) {
+  return a.lo == b.lo && a.hi == b.hi;
+}
+
+}  // namespace
+
+// The session worker keeps a copy of the UI's tree: refitted to a version's positions there,
+// the boxes it hands over around the moved vertices make the UI's copy, whose document now
+// holds those positions, equal a tree refitted in place, box for box.
+TEST(AppBvh, BoxesHandedOverFromACopyEqualARefitInPlace) {
+  TriangleMesh m = make_geodesic_sphere(20000);
+  TriangleBvh ui;
+  ui.build(m.positions, m.triangles);
+  TriangleBvh worker = ui, reference = ui;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-0.05f, 0.05f);
+  std::vector<uint32_t> moved;
+  for (uint32_t v = 0; v < m.positions.size() / 3; ++v) {
+    if (m.positions[3 * size_t{v}] > 0.7f) moved.push_back(v);  // a version's cap
+    if (v % 97 == 0) moved.push_back(v);                        // and scattered vertices
+  }
+  for (uint32_t v : moved)
+    for (int c = 0; c < 3; ++c) m.positions[3 * size_t{v} + size_t(c)] += u(rng);
+  worker.refit_exactly(m.positions, m.triangles, moved);
+  std::vector<uint32_t> nodes;
+  std::vector<BvhBox> boxes;
+  worker.boxes_around(moved, nodes, boxes);
+  ASSERT_FALSE(nodes.empty());
+  ASSERT_EQ(nodes.size(), boxes.size());
+  ASSERT_EQ(std::set<uint32_t>(nodes.begin(), nodes.end()).size(), nodes.size()) << "listed twice";
+  ASSERT_LT(nodes.size(), ui.node_count());  // the boxes around, not the whole tree
+  ui.set_boxes(nodes, boxes);
+  reference.refit_exactly(m.positions, m.triangles, moved);
+  for (uint32_t n = 0; n < ui.node_count(); ++n)
+    ASSERT_TRUE(same_box(ui.box(n), reference.box(n))) << "node " << n;
+}
