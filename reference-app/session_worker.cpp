@@ -468,8 +468,7 @@ void SessionWorker::publish() {
       mirror_.read(box->vertices[i], &box->values[i * stride]);
     box->includes = done_;
     for (uint32_t v : box->vertices)
-      if (!std::equal(&mirror_.positions[3 * size_t{v}], &mirror_.positions[3 * size_t{v} + 3],
-                      &shown_.positions[3 * size_t{v}]))
+      if (block_differs(mirror_.positions, shown_.positions, 3, v, 1))
         box->normals.moved.push_back(v);
     normals_.compute(mirror_.positions.data(), box->normals);
     add_bvh_boxes(*box);
@@ -510,14 +509,12 @@ void SessionWorker::add_bvh_boxes(MeshChanges& box) {
   const uint32_t n = mirror_.vertex_count();
   stale_.clear();
   for (uint32_t first = 0; first < n; first += kBlock) {
-    const size_t begin = 3 * size_t{first}, end = 3 * size_t{std::min(n, first + kBlock)};
-    if (std::equal(&mirror_.positions[begin], &mirror_.positions[0] + end, &bvh_positions_[begin]))
-      continue;
-    for (size_t v = first; 3 * v < end; ++v)
-      if (!std::equal(&mirror_.positions[3 * v], &mirror_.positions[3 * v + 3],
-                      &bvh_positions_[3 * v])) {
-        stale_.push_back(static_cast<uint32_t>(v));
-        std::copy_n(&mirror_.positions[3 * v], 3, &bvh_positions_[3 * v]);
+    const uint32_t count = std::min(kBlock, n - first);
+    if (!block_differs(mirror_.positions, bvh_positions_, 3, first, count)) continue;
+    for (uint32_t v = first; v < first + count; ++v)
+      if (block_differs(mirror_.positions, bvh_positions_, 3, v, 1)) {
+        stale_.push_back(v);
+        std::copy_n(&mirror_.positions[3 * size_t{v}], 3, &bvh_positions_[3 * size_t{v}]);
       }
   }
   bvh_.refit_exactly(mirror_.positions, normals_.corners(), stale_);
