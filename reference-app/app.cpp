@@ -56,6 +56,9 @@ void refresh_callback(GLFWwindow* window) {
 void size_callback(GLFWwindow* window, int, int) {
   app_of(window)->redraw();
 }
+void window_size_callback(GLFWwindow* window, int width, int height) {
+  app_of(window)->on_window_size(width, height);
+}
 void focus_callback(GLFWwindow* window, int) {
   app_of(window)->redraw();
 }
@@ -119,6 +122,8 @@ bool App::open_window() {
   glfwSetScrollCallback(window_, scroll_callback);
   glfwSetWindowRefreshCallback(window_, refresh_callback);
   glfwSetFramebufferSizeCallback(window_, size_callback);
+  glfwSetWindowSizeCallback(window_, window_size_callback);
+  glfwGetWindowSize(window_, &window_width_, &window_height_);
   glfwSetWindowFocusCallback(window_, focus_callback);
   glfwSetCursorEnterCallback(window_, enter_callback);
   if (!tablet_.open(window_, tablet_status_))

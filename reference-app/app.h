@@ -46,6 +46,10 @@ class App final : public InputHandlers {
   bool in_session() const override { return session_.active(); }
   /** Something on screen changed: the next frames are drawn (draw_schedule.h). */
   void redraw() { schedule_.request(); }
+  void on_window_size(int width, int height) {
+    window_width_ = width, window_height_ = height;
+    redraw();
+  }
   unsigned long long session_version() const override {
     return session_.active() ? session_.version() : 0;
   }
@@ -103,6 +107,9 @@ class App final : public InputHandlers {
 
   AppOptions options_;
   GLFWwindow* window_ = nullptr;
+  // The window's size in screen coordinates, kept by its callback: asking X11 for it
+  // (glfwGetWindowSize) is a round trip to the server, twice per brush dab otherwise.
+  int window_width_ = 0, window_height_ = 0;
   bool imgui_ready_ = false;
   MeshDocument document_;
   TriangleBvh bvh_;

@@ -24,23 +24,20 @@ bool App::over_panel(double x, double y) const {
 }
 
 bool App::pick(double x, double y, RayHit& hit) const {
-  int width = 0, height = 0;
-  glfwGetWindowSize(window_, &width, &height);
-  const Ray ray = camera_.ray_through(float(x), float(y), float(width), float(height));
+  const Ray ray =
+      camera_.ray_through(float(x), float(y), float(window_width_), float(window_height_));
   hit = bvh_.raycast(document_.positions, document_.triangles, ray.origin, ray.direction);
   return hit.hit;
 }
 
 DabInput App::dab_input(const RayHit& hit) const {
-  int width = 0, height = 0;
-  glfwGetWindowSize(window_, &width, &height);
   const glm::vec3 eye = camera_.eye();
   const float depth = glm::dot(hit.point - eye, camera_.forward());
   const float radius_pixels = brush_.radius_pixels * (brush_.pressure_radius ? pressure_ : 1.f);
   DabInput input;
   input.center = hit.point;
   input.view_direction = glm::normalize(hit.point - eye);
-  input.radius = radius_pixels * camera_.world_per_pixel(depth, float(height));
+  input.radius = radius_pixels * camera_.world_per_pixel(depth, float(window_height_));
   input.strength = brush_.strength * (brush_.pressure_strength ? pressure_ : 1.f);
   input.invert = stroke_invert_;
   input.kind = stroke_kind_;
@@ -68,8 +65,7 @@ void App::begin_stroke(int mods) {
 }
 
 void App::continue_stroke() {
-  int width = 0, height = 0;
-  glfwGetWindowSize(window_, &width, &height);
+  const int width = window_width_, height = window_height_;
   if (stroke_kind_ == BrushKind::grab) {
     const glm::vec3 target = camera_.point_on_view_plane(float(cursor_x_), float(cursor_y_),
                                                          float(width), float(height), grab_anchor_);
@@ -120,9 +116,7 @@ void App::on_cursor(double x, double y) {
       camera_.orbit(float(dx), float(dy));
       break;
     case Drag::pan: {
-      int width = 0, height = 0;
-      glfwGetWindowSize(window_, &width, &height);
-      camera_.pan(float(dx), float(dy), float(height));
+      camera_.pan(float(dx), float(dy), float(window_height_));
       break;
     }
     case Drag::none:

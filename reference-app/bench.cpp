@@ -97,8 +97,7 @@ int App::run_bench() {
   // A circle around the window's centre, sculpted with the draw brush, one step per frame.
   frame_ms.clear();
   benchmarking_ = true;
-  int window_w = 0, window_h = 0;
-  glfwGetWindowSize(window_, &window_w, &window_h);
+  const int window_w = window_width_, window_h = window_height_;
   const double cx = window_w / 2.0, cy = window_h / 2.0, r = std::min(window_w, window_h) * 0.2;
   on_cursor(cx + r, cy);
   on_button(GLFW_MOUSE_BUTTON_LEFT, GLFW_PRESS, 0);

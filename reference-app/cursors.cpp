@@ -65,8 +65,7 @@ bool App::surface_normal(glm::vec3 point, float radius, glm::vec3& normal) const
 }
 
 void App::draw_remote_cursors() {
-  int width = 0, height = 0;
-  glfwGetWindowSize(window_, &width, &height);
+  const int width = window_width_, height = window_height_;
   if (width <= 0 || height <= 0) return;
   const glm::mat4 view_projection =
       camera_.projection(float(width) / float(height)) * camera_.view();
