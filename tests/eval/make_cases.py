@@ -264,6 +264,20 @@ def held_object(kind):
         o = imported(bpy.ops.import_scene.obj, obj_vertex_count(M + "OBJ/regr01.obj"), filepath=M + "OBJ/regr01.obj")
         normalised(o)
         if kind == "house": subdivided(o, 1)  # each piece on its own: its large faces get vertices
+    elif kind in ("duck", "duck_shipped"):  # the COLLADA duck: one part, open at nothing, UV-split
+        bpy.ops.wm.collada_import(filepath=M + "Collada/duck.dae")
+        o = imported(lambda: None, 2108)
+        normalised(o)
+        if kind == "duck": welded(o); subdivided(o, 1)
+    elif kind == "human":  # HUMAN.blend: a 151-vertex figure, subdivided twice
+        bpy.ops.wm.open_mainfile(filepath=M + "BLEND/HUMAN.blend")
+        o = imported(lambda: None, 151); o.modifiers.clear(); welded(o); normalised(o); subdivided(o, 2)
+    elif kind == "sphere_hole":  # sphereWithHole.stl: an open surface, its hole's rim a boundary
+        o = imported(bpy.ops.import_mesh.stl, None, filepath=M + "STL/sphereWithHole.stl")
+        welded(o); normalised(o); subdivided(o, 2)
+    elif kind == "cubes":  # CubeHierarchy_248.blend: 11 separate boxes, each subdivided on its own
+        bpy.ops.wm.open_mainfile(filepath=M + "BLEND/CubeHierarchy_248.blend")
+        o = imported(lambda: None, None); o.modifiers.clear(); normalised(o); subdivided(o, 3)
     else:
         raise ValueError(kind)
     bpy.context.view_layer.objects.active = o; o.select_set(True)
@@ -583,6 +597,35 @@ elif which == "crumple":
     case("grab_plus_crumpling_detail_torus", "torus_lo",
          [lambda o: detail(o, (1, 0, 0.3), 0.35, 0.12, 82),
           lambda o: grab(o, (1, 0, 0.3), (1.3, 0.2, 0.6), 0.8)], "stack", details=[0])
+elif which == "probe4":
+    # meshes no other set uses (a UV-split duck, a low-poly figure, an open sphere, eleven
+    # boxes), each pairing kind once; scored by hand, not kept (size)
+    case("cast_plus_detail_duck", "duck",
+         [lambda o: detail(o, at("+z"), 0.3, 0.04, 90),
+          lambda o: cast(o, 0.4)], "stack", details=[0])
+    case("grab_plus_detail_duck_shipped", "duck_shipped",
+         [lambda o: detail_along(o, at("+y"), 0.3, 0.05, 91, 'Y'),
+          lambda o: grab(o, at("+y"), at("+y", 1, (0.05, 0.15, 0.05)), 0.6)], "stack", details=[0])
+    case("bend_plus_detail_human", "human",
+         [lambda o: detail(o, at("+z"), 0.3, 0.04, 92),
+          lambda o: bend(o, math.radians(70), 'X')], "stack", details=[0])
+    case("disjoint_human", "human",
+         [lambda o: detail(o, at("+z"), 0.25, 0.04, 93),
+          lambda o: grab(o, at("-z"), at("-z", 1, (0.1, 0, -0.1)), 0.35)], "stack", details=[0])
+    case("taper_plus_detail_sphere_hole", "sphere_hole",
+         [lambda o: detail(o, at("+x"), 0.4, 0.05, 94),
+          lambda o: simple(o, 'TAPER', 0.6, 'Z')], "stack", details=[0])
+    case("twist_plus_detail_cubes", "cubes",
+         [lambda o: detail(o, at("+x"), 0.4, 0.04, 95),
+          lambda o: twist(o, math.radians(60), 'Z')], "stack", details=[0])
+    case("four_artists_duck", "duck",
+         [lambda o: detail(o, at("+z"), 0.3, 0.04, 96),
+          lambda o: tiny_grab(o, at("-z"), (0.03, 0.02, 0), 0.2),
+          lambda o: cast_part(o, 0.4, at("+z"), 0.8),
+          lambda o: grab(o, at("-z", 0.9), at("-z", 0.9, (0.1, 0.05, -0.1)), 0.5)], "stack", details=[0, 1])
+    case("stretch_plus_pinch_human", "human",
+         [lambda o: pinch(o, at("+x"), 0.25, 0.6),
+          lambda o: simple(o, 'STRETCH', 0.3, 'Z')], "stack", details=[0])
 elif which == "house":
     house_grab_case()
     case("cast_plus_detail_house", "house",
