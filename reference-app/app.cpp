@@ -151,15 +151,18 @@ void App::open_start_mesh() {
 void App::finish_join() {
   std::string error;
   const auto start = std::chrono::steady_clock::now();
-  const bool ok = preparing_->take(document_, bvh_, error);
+  PreparedMesh prepared;
+  const bool ok = preparing_->take(prepared, error);
   preparing_.reset();
   if (!ok) {
     report(error);
     session_.leave();
     return;
   }
-  arrays_changed();
-  session_.hand_bvh(bvh_, document_.positions);
+  document_ = std::move(prepared.document);
+  bvh_ = std::move(prepared.bvh);
+  arrays_changed(std::move(prepared.clusters));
+  session_.hand_bvh(std::move(prepared.worker_bvh), std::move(prepared.worker_positions));
   session_.adopted();
   join_ms_ =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
@@ -169,15 +172,17 @@ void App::finish_join() {
 // them is rebuilt.
 void App::layout_changed() {
   bvh_.build(document_.positions, document_.triangles);
-  arrays_changed();
+  DrawClusters clusters;
+  clusters.build(document_.positions, document_.triangles);
+  arrays_changed(std::move(clusters));
 }
 
-// What derives from the document's arrays but the BVH: strokes, undo, the GPU's copy, the
-// camera's framing.
-void App::arrays_changed() {
+// What derives from the document's arrays but the BVH: strokes, undo, the GPU's copy (drawn
+// in `clusters`, built for these arrays), the camera's framing.
+void App::arrays_changed(DrawClusters clusters) {
   sculptor_.reset();
   history_.reset(document_);
-  renderer_.upload_all(document_);
+  renderer_.upload_mesh(document_, std::move(clusters));
   // Frame the mesh: its bounding box's centre and half diagonal.
   glm::vec3 lo(INFINITY), hi(-INFINITY);
   for (size_t i = 0; i < document_.positions.size(); i += 3)
@@ -220,7 +225,7 @@ std::string App::artist_name() const {
 void App::toggle_attribution_view() {
   attribution_view_ = !attribution_view_;
   attribution_dirty_ = true;
-  if (!attribution_view_) renderer_.upload_all(document_);
+  if (!attribution_view_) renderer_.upload_values(document_);
 }
 
 // The document as the session worker keeps it (its own copy).

@@ -64,7 +64,7 @@ class App final : public InputHandlers {
   bool open_window();
   void open_start_mesh();
   void layout_changed();
-  void arrays_changed();
+  void arrays_changed(DrawClusters clusters);
   void finish_join();
   bool frame();
   bool busy() const;

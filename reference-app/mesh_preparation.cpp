@@ -13,18 +13,23 @@ void MeshPreparation::prepare() {
   if (!mesh_)
     error_ = "cannot take the session's mesh";
   else
-    ok_ = document_.adopt(mesh_, "session mesh", error_);
-  if (ok_) bvh_.build(document_.positions, document_.triangles);
+    ok_ = prepared_.document.adopt(mesh_, "session mesh", error_);
+  if (ok_) {
+    const MeshDocument& d = prepared_.document;
+    prepared_.bvh.build(d.positions, d.triangles);
+    prepared_.clusters.build(d.positions, d.triangles);
+    prepared_.worker_bvh = prepared_.bvh;
+    prepared_.worker_positions = d.positions;
+  }
   ready_.store(true, std::memory_order_release);
 }
 
-bool MeshPreparation::take(MeshDocument& document, TriangleBvh& bvh, std::string& error) {
+bool MeshPreparation::take(PreparedMesh& out, std::string& error) {
   thread_.join();
   if (!ok_) {
     error = error_;
     return false;
   }
-  document = std::move(document_);
-  bvh = std::move(bvh_);
+  out = std::move(prepared_);
   return true;
 }

@@ -1,6 +1,7 @@
 // A joined session's mesh made ready off the UI thread: its arrays adopted into a document
-// (with their normals) and its BVH built. At 320K faces that is 50 ms and more, which on the
-// UI thread made every artist's join a frame over 50 ms; the upload is all that is left there.
+// (with their normals), its BVH built and copied for the session worker, its draw clusters
+// built. At 320K faces that is 100 ms and more, which on the UI thread made every artist's
+// join a frame over 50 ms; the upload is all that is left there.
 #pragma once
 
 #include <csculpt.h>
@@ -10,7 +11,18 @@
 #include <thread>
 
 #include "bvh.h"
+#include "draw_clusters.h"
 #include "mesh_document.h"
+
+/** Everything a joined mesh needs before its first frame. */
+struct PreparedMesh {
+  MeshDocument document;
+  TriangleBvh bvh;
+  DrawClusters clusters;  // the renderer's, for document's positions and triangles
+  // The session worker's own copy of `bvh`, and the positions it was fitted to.
+  TriangleBvh worker_bvh;
+  std::vector<float> worker_positions;
+};
 
 class MeshPreparation {
  public:
@@ -21,15 +33,14 @@ class MeshPreparation {
   MeshPreparation& operator=(const MeshPreparation&) = delete;
 
   bool ready() const { return ready_.load(std::memory_order_acquire); }
-  /** Once ready: moves the document and its BVH out; false with `error` when it failed. */
-  bool take(MeshDocument& document, TriangleBvh& bvh, std::string& error);
+  /** Once ready: moves the prepared mesh out; false with `error` when it failed. */
+  bool take(PreparedMesh& out, std::string& error);
 
  private:
   void prepare();
 
   csc_mesh* mesh_;
-  MeshDocument document_;
-  TriangleBvh bvh_;
+  PreparedMesh prepared_;
   std::string error_;
   bool ok_ = false;
   std::atomic<bool> ready_{false};

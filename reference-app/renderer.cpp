@@ -127,7 +127,19 @@ bool Renderer::init(std::string& error) {
   return true;
 }
 
-void Renderer::upload_all(const MeshDocument& document) {
+void Renderer::upload_mesh(const MeshDocument& document, DrawClusters clusters) {
+  clusters_ = std::move(clusters);
+  glBindVertexArray(vao_);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, index_buffer_);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+               static_cast<GLsizeiptr>(clusters_.draw_order().size() * sizeof(uint32_t)),
+               clusters_.draw_order().data(), GL_STATIC_DRAW);
+  glBindVertexArray(0);
+  index_count_ = static_cast<GLsizei>(document.triangles.size());
+  upload_values(document);
+}
+
+void Renderer::upload_values(const MeshDocument& document) {
   vertex_count_ = document.vertex_count();
   upload_marks_.resize(vertex_count_);
   constant_.assign(size_t{vertex_count_} * 3, 0.5f);
@@ -144,14 +156,6 @@ void Renderer::upload_all(const MeshDocument& document) {
                  static_cast<GLsizeiptr>(vertex_count_ * widths[a] * sizeof(float)), data[a],
                  GL_DYNAMIC_DRAW);
   }
-  clusters_.build(document.positions, document.triangles);
-  glBindVertexArray(vao_);
-  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, index_buffer_);
-  glBufferData(GL_ELEMENT_ARRAY_BUFFER,
-               static_cast<GLsizeiptr>(clusters_.draw_order().size() * sizeof(uint32_t)),
-               clusters_.draw_order().data(), GL_STATIC_DRAW);
-  glBindVertexArray(0);
-  index_count_ = static_cast<GLsizei>(document.triangles.size());
   uploaded_last_ = vertex_count_;
 }
 

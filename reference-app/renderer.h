@@ -29,8 +29,12 @@ class Renderer {
   void release();
 
   bool init(std::string& error);
-  /** Uploads the whole mesh (after the layout changed). */
-  void upload_all(const MeshDocument& document);
+  /** Takes a new mesh (after the layout changed): `clusters` built for its positions and
+   *  triangles (DrawClusters::build, which a caller may run on another thread: it is tens of
+   *  milliseconds at 320K faces), then every vertex value uploaded. */
+  void upload_mesh(const MeshDocument& document, DrawClusters clusters);
+  /** Uploads every vertex value again (the same triangles). */
+  void upload_values(const MeshDocument& document);
   /** Uploads `vertices` (unique, any order) as a few contiguous glBufferSubData runs. Called
    *  every frame, empty or not: the draw's clusters catch up with earlier changes. */
   void upload_vertices(const MeshDocument& document, std::span<const uint32_t> vertices);

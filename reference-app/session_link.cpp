@@ -110,8 +110,8 @@ void SessionLink::set_presence(const csc_presence& presence) {
   if (active()) worker_->set_presence(presence);
 }
 
-void SessionLink::hand_bvh(const TriangleBvh& bvh, const std::vector<float>& positions) {
-  if (worker_) worker_->hand_bvh(bvh, positions);
+void SessionLink::hand_bvh(TriangleBvh bvh, std::vector<float> positions) {
+  if (worker_) worker_->hand_bvh(std::move(bvh), std::move(positions));
 }
 
 void SessionLink::hand_stroke(const std::vector<uint32_t>& vertices,

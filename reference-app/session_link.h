@@ -46,7 +46,7 @@ class SessionLink {
   /** This artist's brush cursor (every frame: the library sends at most 20 a second). */
   void set_presence(const csc_presence& presence);
   /** Gives the worker a copy of the document's BVH, tight over `positions`. */
-  void hand_bvh(const TriangleBvh& bvh, const std::vector<float>& positions);
+  void hand_bvh(TriangleBvh bvh, std::vector<float> positions);
   /** An ended stroke: its vertices and their values before and after it. */
   void hand_stroke(const std::vector<uint32_t>& vertices, const std::vector<float>& before,
                    const std::vector<float>& after);

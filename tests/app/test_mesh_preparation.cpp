@@ -1,9 +1,11 @@
 // A joined session's mesh made ready off the UI thread (reference-app/mesh_preparation.h):
-// the document it hands over holds the mesh's arrays with current normals and a BVH built
-// over them; a missing mesh fails with a message; one destroyed before it is taken waits for
-// its thread. Also run under TSan.
+// the document it hands over holds the mesh's arrays with current normals, a BVH built over
+// them and its copy for the session worker, and the draw clusters the UI thread would build;
+// a missing mesh fails with a message; one destroyed before it is taken waits for its thread.
+// Also run under TSan.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <span>
 #include <string>
@@ -11,6 +13,7 @@
 #include <vector>
 
 #include "bvh.h"
+#include "draw_clusters.h"
 #include "mesh_document.h"
 #include "mesh_preparation.h"
 
@@ -31,9 +34,10 @@ TEST(AppMeshPreparation, HandsOverTheMeshWithItsNormalsAndItsBvh) {
   ASSERT_NE(mesh, nullptr) << error;
   MeshPreparation preparation(mesh);
   wait_until_ready(preparation);
-  MeshDocument document;
-  TriangleBvh bvh;
-  ASSERT_TRUE(preparation.take(document, bvh, error)) << error;
+  PreparedMesh prepared;
+  ASSERT_TRUE(preparation.take(prepared, error)) << error;
+  const MeshDocument& document = prepared.document;
+  const TriangleBvh& bvh = prepared.bvh;
   EXPECT_EQ(document.positions, source.positions);
   EXPECT_EQ(document.triangles, source.triangles);
   ASSERT_EQ(document.channels.size(), source.channels.size());
@@ -47,15 +51,26 @@ TEST(AppMeshPreparation, HandsOverTheMeshWithItsNormalsAndItsBvh) {
     for (uint32_t t : bvh.leaf_triangles(leaf)) ++seen[t];
   });
   for (size_t t = 0; t < seen.size(); ++t) ASSERT_EQ(seen[t], 1) << "triangle " << t;
+  // The worker's copy: the same tree over the same positions.
+  EXPECT_EQ(prepared.worker_positions, document.positions);
+  ASSERT_EQ(prepared.worker_bvh.node_count(), bvh.node_count());
+  for (uint32_t leaf = 0; leaf < bvh.node_count(); ++leaf) {
+    const auto a = bvh.leaf_triangles(leaf), b = prepared.worker_bvh.leaf_triangles(leaf);
+    ASSERT_TRUE(std::equal(a.begin(), a.end(), b.begin(), b.end())) << "node " << leaf;
+  }
+  // The clusters: what the UI thread builds from the same arrays.
+  DrawClusters expected;
+  expected.build(document.positions, document.triangles);
+  EXPECT_EQ(prepared.clusters.draw_order(), expected.draw_order());
+  EXPECT_EQ(prepared.clusters.cluster_count(), expected.cluster_count());
 }
 
 TEST(AppMeshPreparation, NoMeshFailsWithAMessage) {
   MeshPreparation preparation(nullptr);
   wait_until_ready(preparation);
-  MeshDocument document;
-  TriangleBvh bvh;
+  PreparedMesh prepared;
   std::string error;
-  EXPECT_FALSE(preparation.take(document, bvh, error));
+  EXPECT_FALSE(preparation.take(prepared, error));
   EXPECT_FALSE(error.empty());
 }
 
