@@ -140,6 +140,7 @@ void Renderer::upload_mesh(const MeshDocument& document, DrawClusters clusters) 
 }
 
 void Renderer::upload_values(const MeshDocument& document) {
+  colour_overridden_ = false;
   vertex_count_ = document.vertex_count();
   upload_marks_.resize(vertex_count_);
   constant_.assign(size_t{vertex_count_} * 3, 0.5f);
@@ -171,7 +172,7 @@ void Renderer::upload_range(const MeshDocument& document, uint32_t first, uint32
   };
   upload(kPosition, document.positions.data(), 3);
   upload(kNormal, document.normals.data(), 3);
-  upload(kAlbedo, channel(document.albedo), 3);
+  if (!colour_overridden_) upload(kAlbedo, channel(document.albedo), 3);
   upload(kRoughness, channel(document.roughness), 1);
   upload(kMetallic, channel(document.metallic), 1);
 }
@@ -201,6 +202,7 @@ void Renderer::upload_vertices(const MeshDocument& document, std::span<const uin
 }
 
 void Renderer::upload_colour_override(std::span<const float> rgb) {
+  colour_overridden_ = true;
   glBindBuffer(GL_ARRAY_BUFFER, buffers_[kAlbedo]);
   glBufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(rgb.size() * sizeof(float)),
                   rgb.data());

@@ -38,7 +38,8 @@ class Renderer {
   /** Uploads `vertices` (unique, any order) as a few contiguous glBufferSubData runs. Called
    *  every frame, empty or not: the draw's clusters catch up with earlier changes. */
   void upload_vertices(const MeshDocument& document, std::span<const uint32_t> vertices);
-  /** Replaces the drawn colours (e.g. the attribution view) without touching the document. */
+  /** Replaces the drawn colours (e.g. the attribution view) without touching the document;
+   *  until upload_values() or upload_mesh(), vertices uploaded as changed keep these colours. */
   void upload_colour_override(std::span<const float> rgb);
   void draw(const glm::mat4& view, const glm::mat4& projection, const ViewSettings& settings);
   uint32_t uploaded_vertices_last() const { return uploaded_last_; }
@@ -57,6 +58,7 @@ class Renderer {
   GLint u_view_ = -1, u_projection_ = -1, u_flat_ = -1, u_wire_ = -1;
   GLsizei index_count_ = 0;
   uint32_t vertex_count_ = 0, uploaded_last_ = 0, drawn_last_ = 0;
+  bool colour_overridden_ = false;
   DrawClusters clusters_;
   Marks upload_marks_;                               // the vertices of one upload, taken in order
   std::vector<uint32_t> range_first_, range_count_;  // visible index ranges, per draw

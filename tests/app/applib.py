@@ -8,6 +8,7 @@ import os
 import struct
 import subprocess
 import tempfile
+import zlib
 
 APP = os.environ.get("CSCULPT_APP") or os.path.join(os.getcwd(), "csculpt-app")
 # A small sphere keeps the frames fast on llvmpipe; the brushes work the same at any size.
@@ -114,6 +115,56 @@ def changed_in(before, after, name):
 def mean(values):
     values = list(values)
     return sum(values) / len(values) if values else 0.0
+
+
+class Picture:
+    """An 8-bit RGB or RGBA PNG as the app's --screenshot writes it (stb_image_write): its
+    pixels, row by row from the top."""
+
+    def __init__(self, path):
+        with open(path, "rb") as f:
+            data = f.read()
+        assert data[:8] == b"\x89PNG\r\n\x1a\n", path
+        at, idat = 8, b""
+        while at < len(data):
+            length, kind = struct.unpack_from(">I4s", data, at)
+            body = data[at + 8:at + 8 + length]
+            if kind == b"IHDR":
+                self.width, self.height, depth, colour = struct.unpack_from(">IIBB", body)
+                assert depth == 8 and colour in (2, 6), (depth, colour)
+                self.channels = 3 if colour == 2 else 4
+            elif kind == b"IDAT":
+                idat += body
+            at += 12 + length
+        raw, stride, n = zlib.decompress(idat), self.width * self.channels, self.channels
+        rows, previous = [], bytearray(stride)
+        for y in range(self.height):
+            kind, row = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
+            for i in range(stride):  # the PNG filters: none, sub, up, average, Paeth
+                a = row[i - n] if i >= n else 0
+                b, c = previous[i], previous[i - n] if i >= n else 0
+                if kind == 1:
+                    row[i] = (row[i] + a) & 255
+                elif kind == 2:
+                    row[i] = (row[i] + b) & 255
+                elif kind == 3:
+                    row[i] = (row[i] + (a + b) // 2) & 255
+                elif kind == 4:
+                    p = a + b - c
+                    pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+                    row[i] = (row[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
+            rows.append(row)
+            previous = row
+        self.rows = rows
+
+    def rgb(self, x, y):
+        at = x * self.channels
+        return tuple(self.rows[y][at:at + 3])
+
+    def mean_rgb(self, x0, y0, x1, y1):
+        """The mean colour over the pixels x0 <= x < x1, y0 <= y < y1."""
+        pixels = [self.rgb(x, y) for y in range(y0, y1) for x in range(x0, x1)]
+        return tuple(sum(p[c] for p in pixels) / len(pixels) for c in range(3))
 
 
 def temp_dir(test):
