@@ -160,13 +160,14 @@ CSC_API csc_status csc_mesh_create(csc_mesh** out, const csc_mesh_desc* desc);
  *  squared [0,1]) that the mesh lacks, filled with a grey rough dielectric. Changes `mesh`. */
 CSC_API csc_status csc_mesh_add_material_channels(csc_mesh* mesh);
 
-/** Reads a .ply, .obj, .off or .stl file (PLY vertex properties become channels). Fails with
- *  CSC_ERROR_IO if it cannot be read, CSC_ERROR_INVALID_INPUT (naming the file, the place
- *  and the problem) if it is malformed. */
+/** Reads a .ply, .obj, .off or .stl file (PLY vertex properties become channels; an OBJ's
+ *  vertex colours, "v x y z r g b" in [0,1], the albedo channel, the default grey where a
+ *  vertex has none). Fails with CSC_ERROR_IO if it cannot be read, CSC_ERROR_INVALID_INPUT
+ *  (naming the file, the place and the problem) if it is malformed. */
 CSC_API csc_status csc_mesh_read(csc_mesh** out, const char* path);
 
 /** Writes .ply (binary, channels as vertex properties; reads back bit-identical) or .obj
- *  (positions and faces). Writes a temporary file and renames it: a failure leaves no partial
+ *  (positions, the albedo as vertex colours, faces; reads back bit-identical in those). Writes a temporary file and renames it: a failure leaves no partial
  *  file. Reads `mesh`. */
 CSC_API csc_status csc_mesh_write(const csc_mesh* mesh, const char* path);
 

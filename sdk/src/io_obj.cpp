@@ -1,5 +1,7 @@
-// Wavefront OBJ: positions (v) and faces (f); everything else (texture coordinates, normals,
-// groups, materials, lines, points) is ignored because a merge only needs the surface.
+// Wavefront OBJ: positions (v), their colours where a file has them (the common extension
+// "v x y z r g b", read as the albedo channel) and faces (f); everything else (texture
+// coordinates, normals, groups, materials, lines, points) is ignored because a merge only
+// needs the surface and its material.
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -29,6 +31,29 @@ void for_each_line(std::string_view text, Fn&& fn) {
     }
     fn(line_no, line);
   }
+}
+
+// A vertex colour's three components, each a finite number in [0, 1] (the extension's range;
+// the albedo channel's).
+void parse_colour(std::string_view rest, std::string_view what, std::size_t line_no,
+                  std::size_t vertex, float rgb[3]) {
+  for (int k = 0; k < 3; ++k) {
+    const std::string_view token = io_detail::next_token(rest);
+    if (!io_detail::parse_float(token, rgb[k]) || !std::isfinite(rgb[k])) {
+      throw InvalidInput(cat(what, ":", line_no, ": bad vertex colour ", quote(token)));
+    }
+    if (rgb[k] < 0.f || rgb[k] > 1.f) {
+      throw InvalidInput(cat(what, ":", line_no, ": vertex ", vertex, ": colour ", "rgb"[k], " is ",
+                             rgb[k], ", outside [0, 1]"));
+    }
+  }
+}
+
+// How many more tokens `rest` holds.
+std::size_t count_tokens(std::string_view rest) {
+  std::size_t n = 0;
+  while (!io_detail::next_token(rest).empty()) ++n;
+  return n;
 }
 
 void append_float(std::string& out, float f) {
@@ -69,6 +94,8 @@ Mesh parse_obj(std::string_view bytes, std::string_view what) {
 
   Mesh mesh;
   mesh.positions.reserve(total_vertices);
+  // Vertex colours, when any vertex has one; a vertex without gets the default albedo.
+  std::vector<float> colours;
   std::vector<std::uint32_t> poly;
   for_each_line(bytes, [&](std::size_t line_no, std::string_view line) {
     std::string_view rest = line;
@@ -88,7 +115,12 @@ Mesh parse_obj(std::string_view bytes, std::string_view what) {
                                  "xyz"[k], " is ", io_detail::non_finite_name(xyz[k])));
         }
       }
-      // Further numbers (w, or the r g b of the vertex-colour extension) are ignored.
+      // Three more numbers are the vertex-colour extension's r g b; one (w) is ignored.
+      if (count_tokens(rest) == 3) {
+        if (colours.empty()) colours.assign(3 * total_vertices, default_albedo);
+        parse_colour(rest, what, line_no, mesh.positions.size(),
+                     &colours[3 * mesh.positions.size()]);
+      }
       mesh.positions.push_back({xyz[0], xyz[1], xyz[2]});
     } else if (keyword == "f") {
       poly.clear();
@@ -124,6 +156,7 @@ Mesh parse_obj(std::string_view bytes, std::string_view what) {
       if (!problem.empty()) throw InvalidInput(cat(what, ":", line_no, ": face ", problem));
     }
   });
+  if (!colours.empty()) mesh.channels.push_back({default_channel("albedo", 3), std::move(colours)});
   io_detail::check_unreferenced(mesh, what);
   validate(mesh, what);
   return mesh;
@@ -134,14 +167,26 @@ namespace io_detail {
 std::string encode_obj(const Mesh& mesh, std::string_view what) {
   validate(mesh, what);
   std::string out = "# written by csculpt\n";
-  out.reserve(out.size() + mesh.vertex_count() * 40 + mesh.face_count() * 24);
-  for (const Vec3f& p : mesh.positions) {
+  out.reserve(out.size() + mesh.vertex_count() * 64 + mesh.face_count() * 24);
+  // The albedo goes out as vertex colours (what readers of the extension show); the other
+  // channels have no place in an OBJ: PLY keeps them.
+  const int albedo = mesh.find_channel("albedo");
+  const float* colours =
+      albedo >= 0 && mesh.channels[static_cast<std::size_t>(albedo)].desc.width == 3
+          ? mesh.channels[static_cast<std::size_t>(albedo)].values.data()
+          : nullptr;
+  for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
+    const Vec3f& p = mesh.positions[v];
     out += "v ";
     append_float(out, p.x);
     out += ' ';
     append_float(out, p.y);
     out += ' ';
     append_float(out, p.z);
+    for (int k = 0; colours && k < 3; ++k) {
+      out += ' ';
+      append_float(out, std::clamp(colours[3 * v + static_cast<std::size_t>(k)], 0.f, 1.f));
+    }
     out += '\n';
   }
   for (const Triangle& t : mesh.triangles) {

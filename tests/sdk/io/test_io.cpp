@@ -523,8 +523,8 @@ TEST(IoObj, FaceFormsAndIgnoredStatements) {
       "mtllib x.mtl\r\n"
       "o thing\r\n"
       "v 0 0 0\r\n"
-      "v 1 0 0 1.0\r\n"          // w ignored
-      "v 1 1 0 0.5 0.5 0.5\r\n"  // vertex colour ignored
+      "v 1 0 0 1.0\r\n"  // w ignored
+      "v 1 1 0\r\n"
       "v 0 1 0\r\n"
       "vt 0 0\r\nvn 0 0 1\r\ng group\r\ns 1\r\nusemtl m\r\n"
       "f 1/1/1 2//1 3/2 4 # quad\r\n"
@@ -539,6 +539,28 @@ TEST(IoObj, FaceFormsAndIgnoredStatements) {
   EXPECT_EQ(m.triangles[1], (Triangle{0, 2, 3}));
   EXPECT_EQ(m.triangles[2], (Triangle{1, 2, 4}));
   EXPECT_TRUE(m.channels.empty());
+}
+
+TEST(IoObj, VertexColoursBecomeTheAlbedo) {
+  // The "v x y z r g b" extension; a vertex without a colour gets the default albedo.
+  const Mesh m = parse_obj(
+      "v 0 0 0 1 0 0\nv 1 0 0 0 0.25 1\nv 0 1 0\nv 1 1 0 0.5 0.5 0.5 \nf 1 2 3\nf 2 4 3\n",
+      "c.obj");
+  ASSERT_EQ(m.channels.size(), 1u);
+  EXPECT_EQ(m.channels[0].desc, default_channel("albedo", 3));
+  const float d = default_albedo;
+  EXPECT_EQ(m.channels[0].values,
+            (std::vector<float>{1, 0, 0, 0, 0.25f, 1, d, d, d, 0.5f, 0.5f, 0.5f}));
+  EXPECT_EQ(m.positions[3], (Vec3f{1, 1, 0}));
+  // A file without colours has no channel (the material channels are the host's to add).
+  EXPECT_TRUE(parse_obj("v 0 0 0 1\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "w.obj").channels.empty());
+  const std::string rest = "v 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  EXPECT_EQ(invalid_input_message([&] { parse_obj("v 0 0 0 1 x 0\n" + rest, "x.obj"); }),
+            "x.obj:1: bad vertex colour 'x'");
+  EXPECT_EQ(invalid_input_message([&] { parse_obj("v 0 0 0 1 nan 0\n" + rest, "n.obj"); }),
+            "n.obj:1: bad vertex colour 'nan'");
+  EXPECT_EQ(invalid_input_message([&] { parse_obj(rest + "v 0 0 0 0 0 255\n", "b.obj"); }),
+            "b.obj:4: vertex 2: colour b is 255, outside [0, 1]");
 }
 
 TEST(IoObj, ErrorsNameTheLine) {
@@ -751,11 +773,21 @@ TEST_F(IoFiles, TruncatedBinaryPly) {
             "j.ply: 4 bytes of unexpected data after the last element");
 }
 
-TEST_F(IoFiles, ObjRoundTripIsBitExactForPositions) {
-  const Mesh m = test::make_icosphere_with_channels();
+TEST_F(IoFiles, ObjRoundTripIsBitExactForPositionsAndAlbedo) {
+  Mesh m = test::make_icosphere_with_channels();
+  const int albedo = m.find_channel("albedo");
+  ASSERT_GE(albedo, 0);
+  for (float& v : m.channels[static_cast<std::size_t>(albedo)].values)
+    v = std::fmod(v * 7.31f, 1.f);
   write_mesh(m, path("s.OBJ"));
   const Mesh back = read_mesh(path("s.OBJ"));
-  EXPECT_EQ(first_difference(back, Mesh{m.positions, m.triangles, {}}), "");
+  // The albedo as vertex colours; the other channels have no place in an OBJ.
+  EXPECT_EQ(
+      first_difference(
+          back, Mesh{m.positions, m.triangles, {m.channels[static_cast<std::size_t>(albedo)]}}),
+      "");
+  write_mesh(Mesh{m.positions, m.triangles, {}}, path("plain.obj"));
+  EXPECT_TRUE(read_mesh(path("plain.obj")).channels.empty());
 }
 
 TEST_F(IoFiles, FailedWritesLeaveNothingBehind) {
