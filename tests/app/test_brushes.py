@@ -183,6 +183,67 @@ class Brushes(unittest.TestCase):
         self.assertGreater(total(light), 0.0)
         self.assertLess(total(light), 0.5 * total(full))
 
+    def stroke_direction(self, replay):
+        """The unit direction, from the sphere's centre, of the vertices a replay moved."""
+        moved = moved_vertices(self.base, self.sculpt(replay))
+        self.assertGreater(len(moved), 20)
+        c = [mean(self.base.position(v)[k] for v in moved) for k in range(3)]
+        length = sum(x * x for x in c) ** 0.5
+        self.assertGreater(length, 0.8)  # around one point of the surface
+        return [x / length for x in c]
+
+    def test_front_side_and_top_views_look_along_three_axes(self):
+        # The same stroke through the window's centre lands on three different poles.
+        centre = ((630, 400), (650, 400))
+        front = self.stroke_direction(Replay().key("d").key("x").drag(*centre))
+        side = self.stroke_direction(Replay().key("3").key("d").key("x").drag(*centre))
+        top = self.stroke_direction(Replay().key("7").key("d").key("x").drag(*centre))
+        back_to_front = self.stroke_direction(Replay().key("7").key("1").key("d").key("x").drag(*centre))
+        for a, b in ((front, side), (front, top), (side, top)):
+            self.assertLess(abs(sum(x * y for x, y in zip(a, b))), 0.2)
+        self.assertGreater(sum(x * y for x, y in zip(front, back_to_front)), 0.99)
+
+    def test_front_faces_only_spares_the_far_side(self):
+        # A wide draw along the right rim: the brush's ball reaches round the silhouette.
+        front = self.stroke_direction(Replay().key("d").key("x").drag((630, 400), (650, 400)))
+
+        def moved(*keys):
+            replay = Replay().key("d").key("x")
+            for k in ("]",) * 5 + keys:
+                replay.key(k)
+            return set(moved_vertices(self.base, self.sculpt(replay.drag((908, 380), (908, 420)))))
+
+        def towards_eye(v):
+            return sum(p * f for p, f in zip(self.base.position(v), front))
+        front_only, all_faces = moved(), moved("v")  # on by default; V turns it off
+        self.assertGreater(len(front_only), 50)
+        beyond = all_faces - front_only
+        self.assertGreater(len(beyond), 20)
+        # What only the second stroke moved lies further round the rim than anything the
+        # first moved: the faces turned away from the eye.
+        self.assertLess(max(map(towards_eye, beyond)), min(map(towards_eye, front_only)) + 0.02)
+
+    def test_radius_keys_widen_and_narrow_the_brush(self):
+        def moved(*keys):
+            replay = Replay().key("d").key("x")
+            for k in keys:
+                replay.key(k)
+            return len(moved_vertices(self.base, self.sculpt(replay.drag(*ACROSS))))
+        default, wider, narrower = moved(), moved("]", "]"), moved("[", "[")
+        self.assertGreater(wider, 1.5 * default)
+        self.assertLess(narrower, 0.75 * default)
+
+    def test_z_symmetry_mirrors_through_the_sphere(self):
+        # The view looks along one axis; Z mirrors across z = 0 wherever that is: a stroke
+        # beside the front pole also moves the point mirrored through z = 0.
+        replay = Replay().key("d").key("x").key("z").drag((700, 380), (740, 380))
+        moved = moved_vertices(self.base, self.sculpt(replay))
+        plain = moved_vertices(self.base, self.sculpt(Replay().key("d").key("x").drag((700, 380), (740, 380))))
+        mirrored = {tuple(round(c, 4) for c in (p[0], p[1], -p[2])) for p in map(self.base.position, plain)}
+        self.assertGreater(len(moved), 1.5 * len(plain))
+        self.assertTrue(any(tuple(round(c, 4) for c in self.base.position(v)) in mirrored for v in moved
+                            if v not in set(plain)))
+
     def test_replay_is_deterministic(self):
         first = self.sculpt(Replay().key("d").drag(*ACROSS))
         second = self.sculpt(Replay().key("d").drag(*ACROSS))

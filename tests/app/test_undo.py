@@ -1,6 +1,7 @@
 """Local undo/redo of one's own strokes (Ctrl+Z / Ctrl+Shift+Z): an undone stroke gives back
 the mesh bit for bit (positions and every channel) and the same picture; redo puts the stroke
-back exactly. Pictures are compared between runs of this same build, never with committed
+back exactly. The wireframe (W) and flat shading (F) toggles change the picture, not the mesh,
+and toggled twice give the picture back. Pictures are compared between runs of this same build, never with committed
 images (they differ by Mesa build)."""
 import os
 import sys
@@ -56,6 +57,14 @@ class Undo(unittest.TestCase):
         all_undone = self.run_replay(Replay().key("b").drag(*STROKE).key("i").drag((600, 350), (700, 350))
                                      .key("z", "ctrl").key("z", "ctrl"))
         self.assertEqual(all_undone[0], self.baseline()[0])
+
+    def test_wireframe_and_flat_shading_toggle_the_picture_only(self):
+        mesh, picture = self.baseline()
+        for key in ("w", "f"):
+            on_mesh, on_picture = self.run_replay(Replay().key(key))
+            self.assertEqual(on_mesh, mesh, key)
+            self.assertNotEqual(on_picture, picture, key)
+            self.assertEqual(self.run_replay(Replay().key(key).key(key))[1], picture, key)
 
 
 if __name__ == "__main__":
