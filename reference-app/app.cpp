@@ -319,9 +319,9 @@ bool App::frame() {
     toggle_attribution_view();  // left: real colours back
   if (attribution_view_ && attribution_dirty_) {
     // The worker computes them after each merged version; until the first, keep trying.
-    if (session_.attribution_colours(attribution_rgb_) &&
-        attribution_rgb_.size() == size_t{document_.vertex_count()} * 3) {
-      renderer_.upload_colour_override(attribution_rgb_);
+    const auto rgb = session_.attribution_colours();
+    if (rgb && rgb->size() == size_t{document_.vertex_count()} * 3) {
+      renderer_.upload_colour_override(*rgb);
       attribution_dirty_ = false;
       schedule_.request(1);
     }

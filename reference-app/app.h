@@ -140,7 +140,6 @@ class App final : public InputHandlers {
   std::vector<Rect> panel_rects_;  // last frame's panels: clicks there are not strokes
   bool show_ui_ = true;
   bool attribution_view_ = false, attribution_dirty_ = false;
-  std::vector<float> attribution_rgb_;
   std::string error_;
   std::array<char, 4096> join_text_{};
   std::array<char, 64> name_text_{};  // the panel's name field; empty: --name's

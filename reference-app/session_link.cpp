@@ -144,8 +144,8 @@ void SessionLink::leave() {
   }
 }
 
-bool SessionLink::attribution_colours(std::vector<float>& rgb) {
-  return active() && worker_->attribution_colours(rgb);
+std::shared_ptr<const std::vector<float>> SessionLink::attribution_colours() {
+  return active() ? worker_->attribution_colours() : nullptr;
 }
 
 void SessionLink::note(std::string message) {

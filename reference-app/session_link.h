@@ -70,8 +70,8 @@ class SessionLink {
   size_t presence_seen() const { return view_.presence_seen; }
   const std::vector<std::string>& messages() const { return messages_; }
   const std::string& status() const { return status_; }
-  /** The latest attribution colours (3 per vertex); false while none came yet. */
-  bool attribution_colours(std::vector<float>& rgb);
+  /** The latest attribution colours (3 per vertex); null while none came yet. */
+  std::shared_ptr<const std::vector<float>> attribution_colours();
 
  private:
   void note(std::string message);

@@ -209,12 +209,10 @@ SessionView SessionWorker::view() const {
   return view_;
 }
 
-bool SessionWorker::attribution_colours(std::vector<float>& rgb) {
+std::shared_ptr<const std::vector<float>> SessionWorker::attribution_colours() {
   std::lock_guard lock(mutex_);
   want_attribution_ = true;
-  if (!attribution_) return false;
-  rgb = *attribution_;
-  return true;
+  return attribution_;
 }
 
 // ---- SessionWorker: the worker thread -------------------------------------------------------

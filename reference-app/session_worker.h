@@ -119,8 +119,9 @@ class SessionWorker {
   /** Waits (up to `timeout_ms`) until every command handed is in the mirror and sent. */
   void settle(int timeout_ms);
   SessionView view() const;
-  /** The latest attribution colours (requests them from now on); false if none yet. */
-  bool attribution_colours(std::vector<float>& rgb);
+  /** The latest attribution colours, 3 per vertex (requests them from now on); null if none
+   *  yet. Shared, never changed: the UI uploads from it without a copy. */
+  std::shared_ptr<const std::vector<float>> attribution_colours();
 
  private:
   struct Command {  // what the UI did, in the order it did it
