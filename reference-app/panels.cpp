@@ -90,7 +90,10 @@ void App::draw_tool_panel() {
   ImGui::Checkbox("radius", &brush_.pressure_radius);
   ImGui::SameLine();
   ImGui::Checkbox("strength", &brush_.pressure_strength);
-  ImGui::TextDisabled("%s", tablet_status_.c_str());
+  // Wrapped: the status names the devices found, wider than the panel.
+  ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyle().Colors[ImGuiCol_TextDisabled]);
+  ImGui::TextWrapped("%s", tablet_status_.c_str());
+  ImGui::PopStyleColor();
 
   section("Paint");
   int channel = static_cast<int>(brush_.paint_channel);
