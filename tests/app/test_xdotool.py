@@ -1,7 +1,7 @@
 """A person at the mouse: xdotool moves the real X pointer over csculpt-app's window under
 Xvfb. A left drag across the sphere sculpts it (the saved mesh differs from the untouched one,
 outwards, as the draw brush does); a click on the panel's "Host a session" button hosts (the
-app prints its INVITE line). Two apps side by side: host by a click, "Copy invite", paste it
+app prints its INVITE line); ticking "Pressure -> radius" narrows a light pen's stroke. Two apps side by side: host by a click, "Copy invite", paste it
 (Ctrl+V) into the other's invite field and click "Join": they are in one session."""
 import os
 import queue
@@ -13,9 +13,10 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(__file__))
-from applib import APP, TEST_SPHERE, Mesh, mean, moved_vertices, run_app, temp_dir  # noqa: E402
+from applib import APP, TEST_SPHERE, Mesh, Replay, mean, moved_vertices, run_app, temp_dir  # noqa: E402
 
 HOST_BUTTON = (1030, 63)  # the Session panel's first button (panels are fixed in place)
+PRESSURE_RADIUS_BOX = (112, 289)  # the Brush panel's "Pressure -> radius" box
 
 
 def xdotool(*args):
@@ -68,6 +69,32 @@ class RealPointer(unittest.TestCase):
         self.assertGreater(len(moved), 50)
         self.assertGreater(mean(after.radius(v) - before.radius(v) for v in moved), 0.005)
 
+
+    def test_ticking_pressure_on_radius_narrows_a_light_stroke(self):
+        # The box is ticked with the real pointer while a replay waits; the replay then draws
+        # with a light pen (replays carry pressure; this machine has no tablet). Unticked, the
+        # same replay moves as many vertices as a full-pressure one would: only strength scales.
+        directory = temp_dir(self)
+        replay = (Replay().pressure(0.3).wait(600).key("d").key("x").drag((590, 400), (690, 400))
+                  .write(directory))
+        ticked_path, unticked_path = os.path.join(directory, "ticked.ply"), os.path.join(directory, "plain.ply")
+        base = os.path.join(directory, "base.ply")
+        run_app(*TEST_SPHERE, "--exit-after", "0", "--save", base)
+        run_app(*TEST_SPHERE, "--replay", replay, "--exit-after", "0", "--save", unticked_path, timeout=120)
+        app = subprocess.Popen([APP, *TEST_SPHERE, "--replay", replay, "--exit-after", "0", "--save", ticked_path],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        self.addCleanup(lambda: app.poll() is None and app.kill())
+        self.assertEqual(app.stdout.readline().strip(), "READY")
+        window = xdotool("search", "--sync", "--pid", app.pid).split()[0]
+        self.click(window, *PRESSURE_RADIUS_BOX)
+        xdotool("mousemove", "--window", window, 640, 760)  # off the panels: the replay draws
+        _, err = app.communicate(timeout=120)
+        self.assertEqual(app.returncode, 0, err)
+        before = Mesh(base)
+        ticked = len(moved_vertices(before, Mesh(ticked_path)))
+        unticked = len(moved_vertices(before, Mesh(unticked_path)))
+        self.assertGreater(ticked, 10)
+        self.assertLess(ticked, 0.6 * unticked)
 
     def start(self, *args):
         app = subprocess.Popen([APP, *TEST_SPHERE, "--size", "640x800", *args], stdout=subprocess.PIPE,
