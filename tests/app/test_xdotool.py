@@ -1,7 +1,8 @@
 """A person at the mouse: xdotool moves the real X pointer over csculpt-app's window under
 Xvfb. A left drag across the sphere sculpts it (the saved mesh differs from the untouched one,
 outwards, as the draw brush does); a click on the panel's "Host a session" button hosts (the
-app prints its INVITE line); ticking "Pressure -> radius" narrows a light pen's stroke. Two apps side by side: host by a click, "Copy invite", paste it
+app prints its INVITE line); ticking "Pressure -> radius" narrows a light pen's stroke; a
+click on Leave takes an app out of its session with the session's mesh kept. Two apps side by side: host by a click, "Copy invite", paste it
 (Ctrl+V) into the other's invite field and click "Join": they are in one session."""
 import os
 import queue
@@ -95,6 +96,31 @@ class RealPointer(unittest.TestCase):
         unticked = len(moved_vertices(before, Mesh(unticked_path)))
         self.assertGreater(ticked, 10)
         self.assertLess(ticked, 0.6 * unticked)
+
+    def test_leave_by_click_keeps_the_mesh_and_the_host_sees_it_go(self):
+        # 640 px wide: the Session panel starts at x = 330; in a session its first row holds
+        # Copy invite and Leave (at x = 451).
+        directory = temp_dir(self)
+        base, kept = os.path.join(directory, "base.ply"), os.path.join(directory, "kept.ply")
+        run_app(*TEST_SPHERE, "--exit-after", "0", "--save", base)
+        stroke = Replay().key("d").drag((560, 400), (720, 400)).write(directory)
+        host = subprocess.Popen([APP, *TEST_SPHERE, "--host", "--replay", stroke, "--exit-after", "10"],
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        self.addCleanup(lambda: host.poll() is None and host.kill())
+        invite = host.stdout.readline().strip().split(" ", 1)[1]
+        joiner, window = self.start("--join", invite, "--exit-after", "14", "--save", kept)
+        xdotool("windowmove", window, 640, 0)
+        time.sleep(3)  # joined, the host's stroke in
+        self.click(window, 451, 63)  # Leave
+        host_out, host_err = host.communicate(timeout=90)
+        self.assertEqual(host.returncode, 0, host_err)
+        out, err = joiner.communicate(timeout=90)
+        self.assertEqual(joiner.returncode, 0, err)
+        self.assertNotIn("SESSION ", out)  # it quit outside the session
+        # The joiner was still running when the host quit (10 s against 14), yet no longer a
+        # member: it said goodbye.
+        self.assertIn("members=1 ", next(line for line in host_out.splitlines() if line.startswith("SESSION ")))
+        self.assertGreater(len(moved_vertices(Mesh(base), Mesh(kept))), 50)  # the session's mesh kept
 
     def start(self, *args):
         app = subprocess.Popen([APP, *TEST_SPHERE, "--size", "640x800", *args], stdout=subprocess.PIPE,
