@@ -11,14 +11,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
+#include <thread>
 
 #include "screenshot.h"
 
 namespace {
-
-struct MeshDeleter {
-  void operator()(csc_mesh* mesh) const { csc_mesh_destroy(mesh); }
-};
 
 App* app_of(GLFWwindow* window) {
   return static_cast<App*>(glfwGetWindowUserPointer(window));
@@ -198,17 +195,28 @@ void App::arrays_changed(DrawClusters clusters) {
   schedule_.request();
 }
 
+// The session is created on the worker; session_tick() prints the invite once it exists.
 void App::host_session() {
   std::string error;
-  std::unique_ptr<csc_mesh, MeshDeleter> mesh(document_.to_csc_mesh(error));
-  if (!mesh || !session_.host(mesh.get(), document_arrays(), artist_name(), error)) {
+  csc_mesh* mesh = document_.to_csc_mesh(error);
+  if (!mesh) {
     report(error);
     return;
   }
+  session_.host(mesh, artist_name());
   history_.reset(document_);  // undo of solo strokes would fight the session's versions
-  session_.hand_bvh(bvh_, document_.positions);
-  std::printf("INVITE %s\n", session_.invite());
-  std::fflush(stdout);
+}
+
+void App::poll_host() {
+  std::string error;
+  const int hosted = session_.poll_host(error);
+  if (hosted < 0) report(error);
+  if (hosted > 0) {
+    std::printf("INVITE %s\n", session_.invite());
+    std::fflush(stdout);
+    // A frame after the click's: each copy of the arrays is tens of milliseconds at 320K.
+    session_.hand_bvh(bvh_, document_.positions);
+  }
 }
 
 void App::join_session(const std::string& invite) {
@@ -228,19 +236,6 @@ void App::toggle_attribution_view() {
   if (!attribution_view_) renderer_.upload_values(document_);
 }
 
-// The document as the session worker keeps it (its own copy).
-MeshArrays App::document_arrays() const {
-  MeshArrays a;
-  a.positions = document_.positions;
-  for (const MeshChannel& c : document_.channels) {
-    a.channels.push_back(c.values);
-    a.widths.push_back(c.width);
-    a.min_value.push_back(c.min_value);
-    a.max_value.push_back(c.max_value);
-  }
-  return a;
-}
-
 // What the session changed (merged versions, the artist's undo, the wire's rounding of the
 // strokes) into the document: only between strokes, and only once the worker's mirror holds
 // every stroke handed to it, so the artist's own work is never overwritten by an older state.
@@ -256,6 +251,7 @@ void App::take_session_changes() {
 }
 
 void App::session_tick() {
+  if (session_.starting_host()) poll_host();
   if (session_.joining()) {
     std::string error;
     const int joined = session_.poll_join(error);
@@ -419,7 +415,14 @@ int App::run() {
   open_start_mesh();
   layout_changed();
   if (!options_.replay_path.empty() && !replay_.load(options_.replay_path, error)) report(error);
-  if (options_.host) host_session();
+  if (options_.host) {
+    host_session();
+    // The scripting contract: the invite is printed before the first frame.
+    while (session_.starting_host()) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      poll_host();
+    }
+  }
   if (!options_.join_invite.empty()) join_session(options_.join_invite);
   if (options_.bench_frames > 0) return run_bench();
   start_time_ = glfwGetTime();

@@ -72,8 +72,9 @@ class App final : public InputHandlers {
   void render(bool with_ui);
   void session_tick();
   void take_session_changes();
-  MeshArrays document_arrays() const;
   void host_session();
+  /** While a hosted session is being created: prints its invite, or reports why it failed. */
+  void poll_host();
   void join_session(const std::string& invite);
   std::string artist_name() const;  // the panel's name field, else --name
   void report(const std::string& message);

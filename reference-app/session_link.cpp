@@ -6,26 +6,26 @@ constexpr size_t kMaxNotes = 4;
 
 }  // namespace
 
-bool SessionLink::host(const csc_mesh* mesh, MeshArrays arrays, const std::string& name,
-                       std::string& error) {
-  csc_session_options options = CSC_SESSION_OPTIONS_INIT;
-  options.name = name.c_str();
-  csc_session* session = nullptr;
-  // Created here, not on the worker: the invite is printed before the first frame (the
-  // scripting contract), and creating costs one hierarchy build, once.
-  if (csc_status s = csc_session_create(&session, mesh, &options); s != CSC_OK) {
-    error = std::string("cannot host a session: ") + csc_status_str(s) + ": " + csc_last_error();
-    return false;
-  }
-  const uint32_t* corners = csc_mesh_triangles(mesh);
-  worker_ = std::make_unique<SessionWorker>(
-      session, std::move(arrays),
-      std::vector<uint32_t>(corners, corners + 3 * size_t{csc_mesh_triangle_count(mesh)}));
+void SessionLink::host(csc_mesh* mesh, const std::string& name) {
+  worker_ = std::make_unique<SessionWorker>(mesh, name);
   joined_ = true;
-  view_ = {};
-  view_.invite = csc_session_invite(session);  // the worker owns the handle from now on
-  status_ = "hosting";
-  return true;
+  starting_host_ = true;
+  view_ = worker_->view();
+  status_ = view_.status;
+}
+
+int SessionLink::poll_host(std::string& error) {
+  if (!starting_host()) return 0;
+  const int state = worker_->state(error);
+  if (state != 0) starting_host_ = false;
+  if (state < 0) {
+    worker_.reset();
+    joined_ = false;
+    status_ = "not in a session";
+    note(error);
+  }
+  if (state > 0) poll_events();  // the invite
+  return state;
 }
 
 void SessionLink::begin_join(const std::string& invite, const std::string& name) {

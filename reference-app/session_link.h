@@ -22,9 +22,14 @@ class SessionLink {
   SessionLink(const SessionLink&) = delete;
   SessionLink& operator=(const SessionLink&) = delete;
 
-  /** Hosts a session on `mesh` (copied; `arrays` are the same values as the app keeps them).
-   *  On failure `error` says why. */
-  bool host(const csc_mesh* mesh, MeshArrays arrays, const std::string& name, std::string& error);
+  /** Starts hosting a session on `mesh` (owned from here; the document's values) in the
+   *  background: the session is active at once (strokes are handed, and merged once it
+   *  exists); poll_host() tells when it exists or failed. */
+  void host(csc_mesh* mesh, const std::string& name);
+  /** While a hosted session is being created: 1, once, when it exists (invite() holds its
+   *  invite), -1 when it could not be (`error`; the link is out of the session), 0 otherwise. */
+  int poll_host(std::string& error);
+  bool starting_host() const { return worker_ && starting_host_; }
   /** Starts joining in the background as `name`; poll_join() tells when it is done. */
   void begin_join(const std::string& invite, const std::string& name);
   /** While joining: 1, once, when the session's mesh has come (take_joined_mesh() for the
@@ -78,7 +83,8 @@ class SessionLink {
 
   std::unique_ptr<SessionWorker> worker_;
   bool joined_ = false;
-  bool adopting_ = false;  // the mesh has come; the app is preparing its document
+  bool adopting_ = false;       // the mesh has come; the app is preparing its document
+  bool starting_host_ = false;  // hosting: the worker is creating the session
   SessionView view_;
   std::vector<std::string> notes_, messages_;  // the app's own; with the worker's
   std::string status_ = "not in a session";

@@ -112,12 +112,10 @@ MeshArrays MeshArrays::of(const csc_mesh* mesh) {
 
 // ---- SessionWorker: the UI thread's side ----------------------------------------------------
 
-SessionWorker::SessionWorker(csc_session* session, MeshArrays initial,
-                             std::vector<uint32_t> triangles)
-    : session_(session), mirror_(std::move(initial)), host_triangles_(std::move(triangles)) {
-  shown_ = mirror_;
-  state_ = 1;
-  local_view_.status = "hosting";
+SessionWorker::SessionWorker(csc_mesh* mesh, std::string name)
+    : host_mesh_(mesh), name_(std::move(name)) {
+  local_view_.status = "starting a session...";
+  view_ = local_view_;
   thread_ = std::thread([this] { run({}); });
 }
 
@@ -135,6 +133,7 @@ SessionWorker::~SessionWorker() {
   wake_.notify_one();
   thread_.join();
   csc_mesh_destroy(joined_mesh_);
+  csc_mesh_destroy(host_mesh_);
 }
 
 int SessionWorker::state(std::string& error) const {
@@ -219,9 +218,36 @@ std::shared_ptr<const std::vector<float>> SessionWorker::attribution_colours() {
 
 void SessionWorker::run(std::string invite) {
   if (!invite.empty() && !join(invite)) return;
-  if (invite.empty()) normals_.set_topology(std::move(host_triangles_), mirror_.vertex_count());
+  if (invite.empty() && !create()) return;
   loop();
   finish();
+}
+
+// Hosting: the mirror, what the UI shows and the normals' topology are the mesh's (the
+// document's values, copied into it when Host was clicked), then the session is made on it.
+bool SessionWorker::create() {
+  mirror_ = MeshArrays::of(host_mesh_);
+  shown_ = mirror_;
+  const uint32_t* corners = csc_mesh_triangles(host_mesh_);
+  normals_.set_topology({corners, corners + 3 * size_t{csc_mesh_triangle_count(host_mesh_)}},
+                        mirror_.vertex_count());
+  csc_session_options options = CSC_SESSION_OPTIONS_INIT;
+  options.name = name_.c_str();
+  csc_session* session = nullptr;
+  const csc_status s = csc_session_create(&session, host_mesh_, &options);
+  csc_mesh_destroy(std::exchange(host_mesh_, nullptr));
+  std::lock_guard lock(mutex_);
+  if (s != CSC_OK) {
+    error_ = abi_error("cannot host a session", s);
+    state_ = -1;
+    return false;
+  }
+  session_ = session;
+  local_view_.status = "hosting";
+  local_view_.invite = csc_session_invite(session);
+  view_ = local_view_;
+  state_ = 1;
+  return true;
 }
 
 bool SessionWorker::join(const std::string& invite) {

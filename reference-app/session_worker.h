@@ -91,9 +91,10 @@ struct MeshChanges {
 
 class SessionWorker {
  public:
-  /** Starts on a session the UI created (hosting): `session` is handed over with `initial`,
-   *  the arrays it was created from, and its triangles (3 corners each). */
-  SessionWorker(csc_session* session, MeshArrays initial, std::vector<uint32_t> triangles);
+  /** Starts hosting a session on `mesh` (owned from here; the document's values) as `name`:
+   *  the worker creates it (one hierarchy build: hundreds of milliseconds at 320K faces, which
+   *  on the UI thread made a click on Host a frame that long). */
+  SessionWorker(csc_mesh* mesh, std::string name);
   /** Starts joining `invite` on the worker; joined() and take_joined_mesh() tell the result. */
   SessionWorker(std::string invite, std::string name);
   ~SessionWorker();  // leaves the session and stops the thread
@@ -101,7 +102,7 @@ class SessionWorker {
   SessionWorker& operator=(const SessionWorker&) = delete;
 
   // ---- UI thread ------------------------------------------------------------------------
-  /** 0 while joining, 1 once in the session, -1 when the join failed (`error`). */
+  /** 0 while joining or creating, 1 once in the session, -1 when that failed (`error`). */
   int state(std::string& error) const;
   /** After a join: the session's mesh for the document (caller destroys), once. */
   csc_mesh* take_joined_mesh();
@@ -139,6 +140,7 @@ class SessionWorker {
 
   void run(std::string invite);
   bool join(const std::string& invite);
+  bool create();
   void loop();
   void drain_inbox();
   void apply_stroke(const Command& c);
@@ -154,9 +156,9 @@ class SessionWorker {
 
   // the worker's own state
   csc_session* session_ = nullptr;
-  std::string name_;  // ours in the session (a joiner's; the host's went to csc_session_create)
-  MeshArrays mirror_, shown_;             // the session's side; what the UI's document holds
-  std::vector<uint32_t> host_triangles_;  // until the thread builds normals_' topology
+  csc_mesh* host_mesh_ = nullptr;  // hosting: what the session is created on, until it is
+  std::string name_;               // ours in the session
+  MeshArrays mirror_, shown_;      // the session's side; what the UI's document holds
   VersionNormals normals_;
   TriangleBvh bvh_;                   // the UI's tree, refitted to the mirror at each publish
   std::vector<float> bvh_positions_;  // what bvh_ is tight over; empty until handed one
