@@ -167,6 +167,8 @@ void App::draw_session_panel() {
   ImGui::TextWrapped("Status: %s", session_.status().c_str());
   if (session_.joining()) {
     ImGui::TextWrapped("Waiting for the session's mesh...");
+  } else if (session_.starting_host()) {
+    ImGui::TextWrapped("Starting the session...");  // no invite to copy yet
   } else if (!session_.active()) {
     if (ImGui::Button("Host a session")) host_session();
     ImGui::InputTextWithHint("##invite", "paste an invite", join_text_.data(), join_text_.size());
