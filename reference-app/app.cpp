@@ -197,6 +197,7 @@ void App::arrays_changed(DrawClusters clusters) {
 
 // The session is created on the worker; session_tick() prints the invite once it exists.
 void App::host_session() {
+  const auto start = std::chrono::steady_clock::now();
   std::string error;
   csc_mesh* mesh = document_.to_csc_mesh(error);
   if (!mesh) {
@@ -205,6 +206,8 @@ void App::host_session() {
   }
   session_.host(mesh, artist_name());
   history_.reset(document_);  // undo of solo strokes would fight the session's versions
+  host_ms_ =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
 void App::poll_host() {
@@ -390,13 +393,13 @@ void App::finish() {
     std::printf(
         "SESSION id=%016llx merger=%016llx version=%llu members=%u submitted=%llu "
         "acknowledged=%llu "
-        "presence=%zu peers=%s join_ms=%.1f\n",
+        "presence=%zu peers=%s join_ms=%.1f host_ms=%.1f\n",
         static_cast<unsigned long long>(session_.id()),
         static_cast<unsigned long long>(stats.merger),
         static_cast<unsigned long long>(session_.version()), stats.members,
         static_cast<unsigned long long>(stats.strokes_submitted),
         static_cast<unsigned long long>(stats.strokes_acknowledged), session_.presence_seen(),
-        names.c_str(), join_ms_);
+        names.c_str(), join_ms_, host_ms_);
     std::fflush(stdout);
   }
   session_.leave();

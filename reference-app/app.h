@@ -124,6 +124,7 @@ class App final : public InputHandlers {
   SessionLink session_;
   std::unique_ptr<MeshPreparation> preparing_;  // a joined mesh being made ready
   double join_ms_ = 0;  // what taking the joined mesh cost the UI thread (SESSION line)
+  double host_ms_ = 0;  // what starting to host cost the UI thread (SESSION line)
   TabletPressure tablet_;
   std::string tablet_status_;  // shown beside the pressure settings
 
