@@ -167,8 +167,8 @@ CSC_API csc_status csc_mesh_add_material_channels(csc_mesh* mesh);
 CSC_API csc_status csc_mesh_read(csc_mesh** out, const char* path);
 
 /** Writes .ply (binary, channels as vertex properties; reads back bit-identical) or .obj
- *  (positions, the albedo as vertex colours, faces; reads back bit-identical in those). Writes a temporary file and renames it: a failure leaves no partial
- *  file. Reads `mesh`. */
+ *  (positions, the albedo as vertex colours, faces; reads back bit-identical in those).
+ *  Writes a temporary file and renames it: a failure leaves no partial file. Reads `mesh`. */
 CSC_API csc_status csc_mesh_write(const csc_mesh* mesh, const char* path);
 
 /** A deep copy. Reads `mesh`. */
