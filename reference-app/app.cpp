@@ -204,8 +204,7 @@ void App::host_session() {
     report(error);
     return;
   }
-  session_.host(mesh, artist_name());
-  history_.reset(document_);  // undo of solo strokes would fight the session's versions
+  session_.host(mesh, peer_settings());
   host_ms_ =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
@@ -213,8 +212,11 @@ void App::host_session() {
 void App::poll_host() {
   std::string error;
   const int hosted = session_.poll_host(error);
-  if (hosted < 0) report(error);
+  if (hosted < 0) report(error);  // the artist's own undo history is still there
   if (hosted > 0) {
+    // Undo of solo strokes would fight the session's versions. The artist may be mid-stroke:
+    // that stroke stays open, and is handed to the session when it ends.
+    history_.forget_strokes();
     std::printf("INVITE %s\n", session_.invite());
     std::fflush(stdout);
     // A frame after the click's: each copy of the arrays is tens of milliseconds at 320K.
@@ -224,12 +226,17 @@ void App::poll_host() {
 
 void App::join_session(const std::string& invite) {
   if (drag_ == Drag::stroke) end_stroke();
-  session_.begin_join(invite, artist_name());
+  session_.begin_join(invite, peer_settings());
 }
 
-std::string App::artist_name() const {
+// Every interface by default: the artists this app is for sit at other machines, and every
+// peer is connected to by every other, so a joiner's endpoint must be reachable as well as the
+// host's. The invite carries this machine's address there, not 0.0.0.0.
+PeerSettings App::peer_settings() const {
   const std::string typed = name_text_.data();
-  return typed.empty() ? options_.name : typed;
+  std::string bind = options_.bind;
+  if (bind.empty()) bind = reachable_ ? "tcp://*:*" : "tcp://127.0.0.1:*";
+  return {typed.empty() ? options_.name : typed, bind};
 }
 
 // The session's attribution colours (who edited where) drawn in place of the albedo.

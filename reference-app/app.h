@@ -76,7 +76,7 @@ class App final : public InputHandlers {
   /** While a hosted session is being created: prints its invite, or reports why it failed. */
   void poll_host();
   void join_session(const std::string& invite);
-  std::string artist_name() const;  // the panel's name field, else --name
+  PeerSettings peer_settings() const;  // the panel's name and reach, else the command line's
   void report(const std::string& message);
   void toggle_attribution_view();
   void finish();
@@ -145,6 +145,7 @@ class App final : public InputHandlers {
   std::string error_;
   std::array<char, 4096> join_text_{};
   std::array<char, 64> name_text_{};  // the panel's name field; empty: --name's
+  bool reachable_ = true;  // listen on every interface, not only this machine's (no --bind)
   std::array<char, 1024> path_text_{};
   std::string shown_message_;
 

@@ -7,14 +7,17 @@
 namespace {
 
 constexpr const char* kUsage =
-    "usage: csculpt-app [MESH] [--host | --join INVITE] [--name NAME] [--replay FILE]\n"
-    "                   [--save PATH]\n"
+    "usage: csculpt-app [MESH] [--host | --join INVITE] [--name NAME] [--bind ENDPOINT]\n"
+    "                   [--replay FILE] [--save PATH]\n"
     "                   [--screenshot PATH] [--exit-after SECONDS] [--bench-frames N]\n"
     "                   [--bench-warmup S] [--sphere-faces N] [--size WxH]\n"
     "  MESH            a .ply/.obj/.off/.stl file; without it, a built-in sphere\n"
     "  --host          host a session; prints `INVITE <invite>` on stdout\n"
     "  --join INVITE   join the session of INVITE\n"
     "  --name NAME     your name in the session's peer list (default $USER)\n"
+    "  --bind ENDPOINT where the other peers reach you, e.g. tcp://192.168.1.5:7000 (port *\n"
+    "                  picks a free one); default tcp://*:* (every interface), or with the\n"
+    "                  panel's \"other machines\" unticked tcp://127.0.0.1:*\n"
     "  --replay FILE   feed recorded input events (see reference-app/README.md)\n"
     "  --save PATH     write the mesh (PLY: every channel) on exit\n"
     "  --screenshot P  write a PNG of the window on exit\n"
@@ -57,6 +60,10 @@ ParseResult parse_options(int argc, char** argv) {
       if (!value(v) || !*v || std::strlen(v) > kMaxName)
         return fail("--name needs a name of 1 to " + std::to_string(kMaxName) + " bytes");
       options.name = v;
+    } else if (arg == "--bind") {
+      if (!value(v) || std::strncmp(v, "tcp://", 6) != 0)
+        return fail("--bind needs a tcp:// endpoint, e.g. tcp://*:7000");
+      options.bind = v;
     } else if (arg == "--replay") {
       if (!value(v)) return fail("--replay needs a file");
       options.replay_path = v;

@@ -10,6 +10,7 @@ struct AppOptions {
   bool host = false;
   std::string join_invite;  // empty: no join
   std::string name;         // shown to the other artists; default $USER, else "artist"
+  std::string bind;         // the session endpoint to listen on; empty: the panel's choice
   std::string replay_path;
   std::string save_path;
   std::string screenshot_path;

@@ -4,6 +4,7 @@
 #include <imgui.h>
 
 #include <cstdio>
+#include <cstring>
 
 #include "app.h"
 
@@ -176,6 +177,10 @@ void App::draw_session_panel() {
     if (ImGui::Button("Join")) join_session(join_text_.data());
     // Below the buttons, so that hosting and joining stay where scripts and habits find them.
     ImGui::InputTextWithHint("Name", options_.name.c_str(), name_text_.data(), name_text_.size());
+    if (options_.bind.empty())
+      ImGui::Checkbox("Other machines can join", &reachable_);
+    else
+      ImGui::TextWrapped("Listening on %s", options_.bind.c_str());
   } else {
     // The buttons first, where "Host a session" was: the invite's length never moves them.
     const csc_session_stats& stats = session_.stats();
@@ -183,6 +188,8 @@ void App::draw_session_panel() {
     ImGui::SameLine();
     if (ImGui::Button("Leave")) session_.leave();
     ImGui::TextWrapped("Invite: %.40s...", session_.invite());
+    // Where the others reach this peer: the address an artist checks against their network.
+    if (const char* at = std::strrchr(session_.invite(), '@')) ImGui::TextWrapped("at %s", at + 1);
     ImGui::Text("me %016llx", static_cast<unsigned long long>(session_.id()));
     ImGui::Text("merger %016llx%s", static_cast<unsigned long long>(stats.merger),
                 stats.merger == session_.id() ? " (me)" : "");

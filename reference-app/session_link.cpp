@@ -6,8 +6,8 @@ constexpr size_t kMaxNotes = 4;
 
 }  // namespace
 
-void SessionLink::host(csc_mesh* mesh, const std::string& name) {
-  worker_ = std::make_unique<SessionWorker>(mesh, name);
+void SessionLink::host(csc_mesh* mesh, PeerSettings settings) {
+  worker_ = std::make_unique<SessionWorker>(mesh, std::move(settings));
   joined_ = true;
   starting_host_ = true;
   view_ = worker_->view();
@@ -28,8 +28,8 @@ int SessionLink::poll_host(std::string& error) {
   return state;
 }
 
-void SessionLink::begin_join(const std::string& invite, const std::string& name) {
-  worker_ = std::make_unique<SessionWorker>(invite, name);
+void SessionLink::begin_join(const std::string& invite, PeerSettings settings) {
+  worker_ = std::make_unique<SessionWorker>(invite, std::move(settings));
   joined_ = false;
   adopting_ = false;
   status_ = "joining...";

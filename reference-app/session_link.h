@@ -25,13 +25,13 @@ class SessionLink {
   /** Starts hosting a session on `mesh` (owned from here; the document's values) in the
    *  background: the session is active at once (strokes are handed, and merged once it
    *  exists); poll_host() tells when it exists or failed. */
-  void host(csc_mesh* mesh, const std::string& name);
+  void host(csc_mesh* mesh, PeerSettings settings);
   /** While a hosted session is being created: 1, once, when it exists (invite() holds its
    *  invite), -1 when it could not be (`error`; the link is out of the session), 0 otherwise. */
   int poll_host(std::string& error);
   bool starting_host() const { return worker_ && starting_host_; }
-  /** Starts joining in the background as `name`; poll_join() tells when it is done. */
-  void begin_join(const std::string& invite, const std::string& name);
+  /** Starts joining in the background; poll_join() tells when it is done. */
+  void begin_join(const std::string& invite, PeerSettings settings);
   /** While joining: 1, once, when the session's mesh has come (take_joined_mesh() for the
    *  document; the session is active once adopted() says the document holds it), -1 when the
    *  join failed (`error`), 0 otherwise. */

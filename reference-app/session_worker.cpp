@@ -20,9 +20,12 @@ std::string abi_error(const char* what, csc_status status) {
   return std::string(what) + ": " + csc_status_str(status) + ": " + csc_last_error();
 }
 
-csc_session_options app_options() {
+// Points into `settings`, which outlives the call it is made for.
+csc_session_options session_options(const PeerSettings& settings) {
   csc_session_options options = CSC_SESSION_OPTIONS_INIT;
   options.join_timeout_ms = 10000;
+  options.name = settings.name.c_str();
+  if (!settings.bind.empty()) options.bind = settings.bind.c_str();
   return options;
 }
 
@@ -112,14 +115,15 @@ MeshArrays MeshArrays::of(const csc_mesh* mesh) {
 
 // ---- SessionWorker: the UI thread's side ----------------------------------------------------
 
-SessionWorker::SessionWorker(csc_mesh* mesh, std::string name)
-    : host_mesh_(mesh), name_(std::move(name)) {
+SessionWorker::SessionWorker(csc_mesh* mesh, PeerSettings settings)
+    : host_mesh_(mesh), settings_(std::move(settings)) {
   local_view_.status = "starting a session...";
   view_ = local_view_;
   thread_ = std::thread([this] { run({}); });
 }
 
-SessionWorker::SessionWorker(std::string invite, std::string name) : name_(std::move(name)) {
+SessionWorker::SessionWorker(std::string invite, PeerSettings settings)
+    : settings_(std::move(settings)) {
   local_view_.status = "joining...";
   view_ = local_view_;
   thread_ = std::thread([this, invite = std::move(invite)] { run(invite); });
@@ -231,8 +235,7 @@ bool SessionWorker::create() {
   const uint32_t* corners = csc_mesh_triangles(host_mesh_);
   normals_.set_topology({corners, corners + 3 * size_t{csc_mesh_triangle_count(host_mesh_)}},
                         mirror_.vertex_count());
-  csc_session_options options = CSC_SESSION_OPTIONS_INIT;
-  options.name = name_.c_str();
+  const csc_session_options options = session_options(settings_);
   csc_session* session = nullptr;
   const csc_status s = csc_session_create(&session, host_mesh_, &options);
   csc_mesh_destroy(std::exchange(host_mesh_, nullptr));
@@ -251,8 +254,7 @@ bool SessionWorker::create() {
 }
 
 bool SessionWorker::join(const std::string& invite) {
-  csc_session_options options = app_options();
-  options.name = name_.c_str();
+  const csc_session_options options = session_options(settings_);
   csc_session* session = nullptr;
   csc_mesh* base = nullptr;
   csc_status s = csc_session_join(&session, invite.c_str(), &options);
@@ -377,7 +379,7 @@ void SessionWorker::sync() {
   const csc_session_stats& stats = local_view_.stats;
   const bool resubmit = stats.strokes_acknowledged < stats.strokes_submitted &&
                         std::chrono::steady_clock::now() - last_submit_ >
-                            std::chrono::milliseconds(app_options().sync_ms);
+                            std::chrono::milliseconds(session_options(settings_).sync_ms);
   if (strokes_unsent_ > 0 || resubmit) {
     int32_t sent = 0;
     last_submit_ = std::chrono::steady_clock::now();

@@ -89,14 +89,22 @@ struct MeshChanges {
   std::vector<BvhBox> bvh_boxes;
 };
 
+/** Who this peer is in a session and where the other peers reach it. */
+struct PeerSettings {
+  std::string name;  // shown in the others' peer lists
+  // The ZeroMQ endpoint to listen on. Every peer is connected to by every other (a full mesh),
+  // so a joiner on another machine needs it reachable too, not only the host.
+  std::string bind;
+};
+
 class SessionWorker {
  public:
-  /** Starts hosting a session on `mesh` (owned from here; the document's values) as `name`:
+  /** Starts hosting a session on `mesh` (owned from here; the document's values):
    *  the worker creates it (one hierarchy build: hundreds of milliseconds at 320K faces, which
    *  on the UI thread made a click on Host a frame that long). */
-  SessionWorker(csc_mesh* mesh, std::string name);
+  SessionWorker(csc_mesh* mesh, PeerSettings settings);
   /** Starts joining `invite` on the worker; joined() and take_joined_mesh() tell the result. */
-  SessionWorker(std::string invite, std::string name);
+  SessionWorker(std::string invite, PeerSettings settings);
   ~SessionWorker();  // leaves the session and stops the thread
   SessionWorker(const SessionWorker&) = delete;
   SessionWorker& operator=(const SessionWorker&) = delete;
@@ -157,8 +165,8 @@ class SessionWorker {
   // the worker's own state
   csc_session* session_ = nullptr;
   csc_mesh* host_mesh_ = nullptr;  // hosting: what the session is created on, until it is
-  std::string name_;               // ours in the session
-  MeshArrays mirror_, shown_;      // the session's side; what the UI's document holds
+  PeerSettings settings_;
+  MeshArrays mirror_, shown_;  // the session's side; what the UI's document holds
   VersionNormals normals_;
   TriangleBvh bvh_;                   // the UI's tree, refitted to the mirror at each publish
   std::vector<float> bvh_positions_;  // what bvh_ is tight over; empty until handed one

@@ -14,6 +14,11 @@
 class StrokeHistory {
  public:
   void reset(const MeshDocument& document);
+  /** Drops the kept strokes (nothing to undo or redo); a stroke being drawn stays open. */
+  void forget_strokes() {
+    strokes_.clear();
+    undo_count_ = 0;
+  }
   void begin_stroke();
   /** Records `vertex`'s values before the stroke first changes it (call before changing). */
   void touch(const MeshDocument& document, uint32_t vertex);

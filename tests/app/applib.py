@@ -34,6 +34,17 @@ def run_app(*args, timeout=60, check=True):
     return result
 
 
+def start_host(test, *args, stderr=subprocess.PIPE):
+    """Starts `csculpt-app --host ARGS` (killed at the test's end if still running); returns the
+    process and its invite, once it has printed it."""
+    host = subprocess.Popen([APP, "--host", *args], stdout=subprocess.PIPE, stderr=stderr, text=True)
+    test.addCleanup(lambda: host.poll() is None and (host.kill(), host.wait()))
+    test.addCleanup(host.stdout.close)
+    line = host.stdout.readline().strip()
+    test.assertTrue(line.startswith("INVITE "), line)
+    return host, line.split(" ", 1)[1]
+
+
 class Replay:
     """Builds a --replay file: moves, presses, keys and frame waits."""
 

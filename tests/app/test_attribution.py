@@ -10,7 +10,7 @@ import sys
 import unittest
 
 sys.path.insert(0, os.path.dirname(__file__))
-from applib import APP, TEST_SPHERE, Picture, Replay, assert_normals_current, temp_dir  # noqa: E402
+from applib import APP, TEST_SPHERE, Picture, Replay, assert_normals_current, start_host, temp_dir  # noqa: E402
 
 # Above and below the middle: with the default X symmetry each stroke is mirrored to the
 # other side, so the two artists' regions differ in height, not side.
@@ -31,13 +31,9 @@ class Attribution(unittest.TestCase):
         host_path = host_replay.write(directory, "host.replay")
         join_replay = Replay().wait("session").key("d").drag(*JOIN_STROKE).write(directory, "join.replay")
         png = os.path.join(directory, "host.png")
-        host = subprocess.Popen([APP, *TEST_SPHERE, "--host", "--replay", host_path, "--exit-after",
-                                 host_exit_after, "--screenshot", png], stdout=subprocess.PIPE,
-                                stderr=subprocess.PIPE, text=True)
-        self.addCleanup(lambda: host.poll() is None and host.kill())
-        invite_line = host.stdout.readline().strip()
-        self.assertTrue(invite_line.startswith("INVITE "), invite_line)
-        joiner = subprocess.run([APP, "--join", invite_line.split(" ", 1)[1], "--replay", join_replay,
+        host, invite = start_host(self, *TEST_SPHERE, "--replay", host_path, "--exit-after",
+                                  host_exit_after, "--screenshot", png)
+        joiner = subprocess.run([APP, "--join", invite, "--replay", join_replay,
                                  "--exit-after", "6"], capture_output=True, text=True, timeout=90)
         self.assertEqual(joiner.returncode, 0, joiner.stderr)
         host_out, host_err = host.communicate(timeout=90)

@@ -1,13 +1,14 @@
-"""Bad input never stops the artist: a malformed or missing mesh file, a malformed invite and
-an invite whose host is gone each give a message (stderr, and the panel) and the app keeps
-running on the built-in sphere until --exit-after, exiting 0; a stroke made meanwhile is kept."""
+"""Bad input never stops the artist: a malformed or missing mesh file, a malformed invite, an
+invite whose host is gone and an endpoint that cannot be listened on each give a message
+(stderr, and the panel) and the app keeps running on the built-in sphere until --exit-after,
+exiting 0; a stroke made meanwhile is kept."""
 import os
-import subprocess
+import socket
 import sys
 import unittest
 
 sys.path.insert(0, os.path.dirname(__file__))
-from applib import TEST_SPHERE, Mesh, Replay, moved_vertices, run_app, temp_dir  # noqa: E402
+from applib import TEST_SPHERE, Mesh, Replay, moved_vertices, run_app, start_host, temp_dir  # noqa: E402
 
 
 class BadInput(unittest.TestCase):
@@ -67,6 +68,44 @@ class BadInput(unittest.TestCase):
         self.assertIn("cannot join", result.stderr)
         moved = moved_vertices(Mesh(self.base_path), Mesh(self._last_saved(saved)))
         self.assertGreater(len(moved), 50)
+
+    def test_hosting_on_a_port_in_use(self):
+        # Another program holds the port: hosting fails with the reason, out of the session,
+        # and the artist's own strokes and undo work as if it had never been tried.
+        with socket.socket() as taken:
+            taken.bind(("127.0.0.1", 0))
+            taken.listen()
+            endpoint = "tcp://127.0.0.1:%d" % taken.getsockname()[1]
+            directory = temp_dir(self)
+            replay = Replay().key("d").drag((590, 400), (690, 400)).drag((590, 300), (690, 300)) \
+                .key("z", "ctrl").write(directory, "two.replay")
+            result, saved = self.run_kept_alive("--host", "--bind", endpoint, "--replay", replay)
+        self.assertIn("cannot host a session", result.stderr)
+        self.assertIn(endpoint, result.stderr)
+        self.assertIn("Address already in use", result.stderr)
+        self.assertNotIn("INVITE", result.stdout)
+        self.assertNotIn("SESSION", result.stdout)  # not left in a session that never was
+        one_stroke = os.path.join(directory, "one.ply")
+        run_app(*TEST_SPHERE, "--replay", Replay().key("d").drag((590, 400), (690, 400)).write(directory),
+                "--exit-after", "0", "--save", one_stroke)
+        with open(one_stroke, "rb") as f:
+            self.assertEqual(saved, f.read())  # the second stroke undone, the first kept
+
+    def test_joining_from_a_port_in_use(self):
+        host, invite = start_host(self, *TEST_SPHERE, "--exit-after", "20")
+        with socket.socket() as taken:
+            taken.bind(("127.0.0.1", 0))
+            taken.listen()
+            endpoint = "tcp://127.0.0.1:%d" % taken.getsockname()[1]
+            result, saved = self.run_kept_alive("--join", invite, "--bind", endpoint)
+        self.assertIn("cannot join", result.stderr)
+        self.assertIn("Address already in use", result.stderr)
+        self.assertEqual(saved, self.base)
+
+    def test_bind_must_be_an_endpoint(self):
+        result = run_app("--bind", "192.168.1.5:7000", check=False, timeout=30)
+        self.assertEqual(result.returncode, 2, result)
+        self.assertIn("--bind needs a tcp:// endpoint", result.stdout + result.stderr)
 
     def _last_saved(self, data):
         path = os.path.join(temp_dir(self), "saved.ply")

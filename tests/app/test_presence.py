@@ -14,7 +14,7 @@ import sys
 import unittest
 
 sys.path.insert(0, os.path.dirname(__file__))
-from applib import APP, TEST_SPHERE, Replay, temp_dir  # noqa: E402
+from applib import APP, TEST_SPHERE, Replay, start_host, temp_dir  # noqa: E402
 
 
 def session_line(out):
@@ -33,18 +33,14 @@ class Presence(unittest.TestCase):
         replay = Replay().wait("session").wait(10)
         for x in range(600, 700, 10):
             replay.lines += [f"move {x} 400", "wait 6"]
-        host = subprocess.Popen([APP, *TEST_SPHERE, "--host", "--name", "alice", "--exit-after", "8"],
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        self.addCleanup(lambda: host.poll() is None and host.kill())
-        invite_line = host.stdout.readline().strip()
-        self.assertTrue(invite_line.startswith("INVITE "), invite_line)
+        host, invite = start_host(self, *TEST_SPHERE, "--name", "alice", "--exit-after", "8")
         self.assertEqual(host.stdout.readline().strip(), "READY")
         # The bottom-right corner: no mesh and no panel there (moved over a window: Xvfb's
         # bare root does not take the move).
         window = subprocess.run(["xdotool", "search", "--sync", "--name", "^cSculpt$"], check=True,
                                 capture_output=True, text=True).stdout.split()[0]
         subprocess.run(["xdotool", "mousemove", "--window", window, "1275", "795"], check=True)
-        joiner = subprocess.run([APP, "--join", invite_line.split(" ", 1)[1], "--name", "bob", "--replay",
+        joiner = subprocess.run([APP, "--join", invite, "--name", "bob", "--replay",
                                  replay.write(directory), "--exit-after", "3"],
                                 capture_output=True, text=True, timeout=60)
         self.assertEqual(joiner.returncode, 0, joiner.stderr)

@@ -2,9 +2,13 @@
 invite), the other joins with it; each replays a stroke over the same region (a draw across,
 a paint and an inflate down), both save on exit. They must end with the same mesh bit for bit,
 holding both artists' strokes. And when the hosting app is killed, the other carries on: it
-becomes the merger and its strokes are merged."""
+becomes the merger and its strokes are merged. An invite names an address of this machine that
+other machines reach, unless the artist keeps the session to this machine."""
+import fcntl
 import os
 import signal
+import socket
+import struct
 import subprocess
 import sys
 import time
@@ -12,7 +16,22 @@ import unittest
 
 sys.path.insert(0, os.path.dirname(__file__))
 from applib import (APP, TEST_SPHERE, Mesh, Replay, assert_normals_current, changed_in,  # noqa: E402
-                    moved_vertices, run_app, temp_dir)
+                    moved_vertices, run_app, start_host, temp_dir)
+
+
+def machine_ipv4s():
+    """This machine's IPv4 addresses but loopback's (SIOCGIFADDR on each interface)."""
+    found = set()
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        for _, name in socket.if_nameindex():
+            try:
+                reply = fcntl.ioctl(s.fileno(), 0x8915, struct.pack("256s", name[:15].encode()))
+            except OSError:
+                continue  # down, or no IPv4 address
+            address = socket.inet_ntoa(reply[20:24])
+            if not address.startswith("127."):
+                found.add(address)
+    return found
 
 
 class TwoApps(unittest.TestCase):
@@ -25,12 +44,9 @@ class TwoApps(unittest.TestCase):
                        .key("i").drag((660, 330), (660, 470)).write(directory, "join.replay"))
         host_ply, join_ply = os.path.join(directory, "host.ply"), os.path.join(directory, "join.ply")
 
-        host = subprocess.Popen([APP, *TEST_SPHERE, "--host", "--replay", host_replay, "--exit-after", "14",
-                                 "--save", host_ply], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        self.addCleanup(lambda: host.poll() is None and host.kill())
-        invite_line = host.stdout.readline().strip()
-        self.assertTrue(invite_line.startswith("INVITE "), invite_line)
-        joiner = subprocess.run([APP, "--join", invite_line.split(" ", 1)[1], "--replay", join_replay,
+        host, invite = start_host(self, *TEST_SPHERE, "--replay", host_replay, "--exit-after", "14",
+                                  "--save", host_ply)
+        joiner = subprocess.run([APP, "--join", invite, "--replay", join_replay,
                                  "--exit-after", "9", "--save", join_ply], capture_output=True, text=True, timeout=90)
         self.assertEqual(joiner.returncode, 0, joiner.stderr)
         host_out, host_err = host.communicate(timeout=90)
@@ -51,13 +67,19 @@ class TwoApps(unittest.TestCase):
         self.assertGreater(len(painted), 50)
 
 
+    def test_the_invite_names_an_address_other_machines_reach(self):
+        # By default the app listens on every interface (so does a joiner: every peer is
+        # connected to by every other). The joins in the tests above go through that address,
+        # as a colleague's on another machine would.
+        _, invite = start_host(self, *TEST_SPHERE, "--exit-after", "0")
+        address = invite.rsplit("@tcp://", 1)[1].rsplit(":", 1)[0]
+        self.assertIn(address, machine_ipv4s() or {"127.0.0.1"})
+        _, local = start_host(self, *TEST_SPHERE, "--bind", "tcp://127.0.0.1:*", "--exit-after", "0")
+        self.assertIn("@tcp://127.0.0.1:", local)
+
     def test_joiner_carries_on_when_the_host_is_killed(self):
         directory = temp_dir(self)
-        host = subprocess.Popen([APP, *TEST_SPHERE, "--host"], stdout=subprocess.PIPE,
-                                stderr=subprocess.DEVNULL, text=True)
-        self.addCleanup(lambda: host.poll() is None and host.kill())
-        self.addCleanup(host.stdout.close)
-        invite = host.stdout.readline().strip().split(" ", 1)[1]
+        host, invite = start_host(self, *TEST_SPHERE, stderr=subprocess.DEVNULL)
         # The joiner strokes once while the host merges, is left alone (SIGKILL: no goodbye),
         # and strokes again after the re-election (expiry is 1.2 s).
         replay = (Replay().wait("session").key("d").drag((590, 400), (690, 400)).wait(40)

@@ -12,7 +12,7 @@ import sys
 import unittest
 
 sys.path.insert(0, os.path.dirname(__file__))
-from applib import APP, TEST_SPHERE, Mesh, Replay, assert_normals_current, run_app, temp_dir  # noqa: E402
+from applib import APP, TEST_SPHERE, Mesh, Replay, assert_normals_current, run_app, start_host, temp_dir  # noqa: E402
 
 HOST_STROKE = ((540, 400), (740, 400))   # across the sphere's middle
 JOIN_STROKE = ((640, 300), (640, 500))   # down through the same middle
@@ -34,14 +34,10 @@ class SessionUndo(unittest.TestCase):
             join_replay.lines.append(line)
         host_ply = os.path.join(directory, f"{name}-host.ply")
         join_ply = os.path.join(directory, f"{name}-join.ply")
-        host = subprocess.Popen([APP, *TEST_SPHERE, "--host", "--replay",
-                                 host_replay.write(directory, f"{name}-host.replay"),
-                                 "--exit-after", "1", "--save", host_ply],
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        self.addCleanup(lambda: host.poll() is None and host.kill())
-        invite = host.stdout.readline().strip()
-        self.assertTrue(invite.startswith("INVITE "), invite)
-        joiner = subprocess.run([APP, "--join", invite.split(" ", 1)[1], "--replay",
+        host, invite = start_host(self, *TEST_SPHERE, "--replay",
+                                  host_replay.write(directory, f"{name}-host.replay"),
+                                  "--exit-after", "1", "--save", host_ply)
+        joiner = subprocess.run([APP, "--join", invite, "--replay",
                                  join_replay.write(directory, f"{name}-join.replay"),
                                  "--exit-after", "1", "--save", join_ply],
                                 capture_output=True, text=True, timeout=120)

@@ -14,7 +14,7 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(__file__))
-from applib import APP, TEST_SPHERE, Mesh, Replay, mean, moved_vertices, run_app, temp_dir  # noqa: E402
+from applib import APP, TEST_SPHERE, Mesh, Replay, mean, moved_vertices, run_app, start_host, temp_dir  # noqa: E402
 
 HOST_BUTTON = (1030, 63)  # the Session panel's first button (panels are fixed in place)
 PRESSURE_RADIUS_BOX = (112, 289)  # the Brush panel's "Pressure -> radius" box
@@ -104,10 +104,7 @@ class RealPointer(unittest.TestCase):
         base, kept = os.path.join(directory, "base.ply"), os.path.join(directory, "kept.ply")
         run_app(*TEST_SPHERE, "--exit-after", "0", "--save", base)
         stroke = Replay().key("d").drag((560, 400), (720, 400)).write(directory)
-        host = subprocess.Popen([APP, *TEST_SPHERE, "--host", "--replay", stroke, "--exit-after", "10"],
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        self.addCleanup(lambda: host.poll() is None and host.kill())
-        invite = host.stdout.readline().strip().split(" ", 1)[1]
+        host, invite = start_host(self, *TEST_SPHERE, "--replay", stroke, "--exit-after", "10")
         joiner, window = self.start("--join", invite, "--exit-after", "14", "--save", kept)
         xdotool("windowmove", window, 640, 0)
         time.sleep(3)  # joined, the host's stroke in
@@ -144,13 +141,17 @@ class RealPointer(unittest.TestCase):
 
     def test_host_copy_paste_join_by_clicks(self):
         # 640 px wide: the Session panel starts at x = 330; its first button (Host a session,
-        # then Copy invite) is at y = 63, the invite field and Join below it at y = 86.
+        # then Copy invite) is at y = 63, the invite field and Join below it at y = 86, the
+        # "Other machines can join" box at y = 132.
         host, host_window = self.start("--exit-after", "25")
         joiner, joiner_window = self.start("--exit-after", "20")
         xdotool("windowmove", joiner_window, 640, 0)
         time.sleep(0.5)
+        self.click(host_window, 347, 132)  # untick "Other machines can join": this machine only
         self.click(host_window, 390, 63)  # Host a session
-        self.assertTrue(host.stdout.readline().startswith("INVITE "))
+        invite = host.stdout.readline()
+        self.assertTrue(invite.startswith("INVITE "), invite)
+        self.assertIn("@tcp://127.0.0.1:", invite)
         self.click(host_window, 385, 63)  # Copy invite (where Host was)
         self.click(joiner_window, 430, 86)  # the invite field
         # ImGui 1.86 has no input queue: a key pressed and released within a frame is lost,
