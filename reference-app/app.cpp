@@ -198,13 +198,8 @@ void App::arrays_changed(DrawClusters clusters) {
 // The session is created on the worker; session_tick() prints the invite once it exists.
 void App::host_session() {
   const auto start = std::chrono::steady_clock::now();
-  std::string error;
-  csc_mesh* mesh = document_.to_csc_mesh(error);
-  if (!mesh) {
-    report(error);
-    return;
-  }
-  session_.host(mesh, peer_settings());
+  HostCopy copy = host_staging_.copy(document_, bvh_);
+  session_.host(std::move(copy.content), std::move(copy.bvh), peer_settings());
   host_ms_ =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
@@ -219,8 +214,6 @@ void App::poll_host() {
     history_.forget_strokes();
     std::printf("INVITE %s\n", session_.invite());
     std::fflush(stdout);
-    // A frame after the click's: each copy of the arrays is tens of milliseconds at 320K.
-    session_.hand_bvh(bvh_, document_.positions);
   }
 }
 
@@ -261,6 +254,8 @@ void App::take_session_changes() {
 }
 
 void App::session_tick() {
+  if (!session_.active() && !session_.joining() && !host_staging_.prepared_for(document_))
+    host_staging_.prepare(document_, bvh_);  // for the next click on Host (host_staging.h)
   if (session_.starting_host()) poll_host();
   if (session_.joining()) {
     std::string error;
@@ -426,6 +421,8 @@ int App::run() {
   layout_changed();
   if (!options_.replay_path.empty() && !replay_.load(options_.replay_path, error)) report(error);
   if (options_.host) {
+    host_staging_.prepare(document_, bvh_);
+    host_staging_.wait();  // as the memory is on a click, a moment after the mesh is open
     host_session();
     // The scripting contract: the invite is printed before the first frame.
     while (session_.starting_host()) {

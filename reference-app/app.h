@@ -16,6 +16,7 @@
 #include "bvh.h"
 #include "camera.h"
 #include "draw_schedule.h"
+#include "host_staging.h"
 #include "input.h"
 #include "mesh_document.h"
 #include "mesh_preparation.h"
@@ -122,6 +123,7 @@ class App final : public InputHandlers {
   ViewSettings view_;
   ReplayPlayer replay_;
   SessionLink session_;
+  HostStaging host_staging_;  // memory for hosting's copies of the arrays and the BVH
   std::unique_ptr<MeshPreparation> preparing_;  // a joined mesh being made ready
   double join_ms_ = 0;  // what taking the joined mesh cost the UI thread (SESSION line)
   double host_ms_ = 0;  // what starting to host cost the UI thread (SESSION line)

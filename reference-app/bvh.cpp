@@ -291,3 +291,23 @@ RayHit TriangleBvh::raycast(const std::vector<float>& positions,
   }
   return best;
 }
+
+std::vector<size_t> TriangleBvh::array_sizes() const {
+  std::vector<size_t> sizes{nodes_.size(), depth_.size()};
+  for (const std::vector<uint32_t>* a : uint32_arrays(*this)) sizes.push_back(a->size());
+  for (const std::vector<uint32_t>& level : by_depth_) sizes.push_back(level.size());
+  return sizes;
+}
+
+TriangleBvh TriangleBvh::with_room_for(const std::vector<size_t>& sizes) {
+  TriangleBvh t;  // resize() writes every element: each page is faulted in here
+  size_t i = 0;
+  t.nodes_.resize(sizes[i++]);
+  t.depth_.resize(sizes[i++]);
+  for (std::vector<uint32_t>* a : uint32_arrays(t)) a->resize(sizes[i++]);
+  t.by_depth_.resize(sizes.size() - i);
+  for (std::vector<uint32_t>& level : t.by_depth_) level.resize(sizes[i++]);
+  for (Marks* m : {&t.growing_marks_, &t.loose_marks_, &t.tighten_marks_, &t.listed_marks_})
+    m->resize(t.nodes_.size());  // as build() sizes them
+  return t;
+}

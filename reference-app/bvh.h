@@ -8,6 +8,7 @@
 
 #include <glm/vec3.hpp>
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -75,6 +76,12 @@ class TriangleBvh {
 
   size_t node_count() const { return nodes_.size(); }
 
+  /** The sizes of the tree's large arrays. A tree made with_room_for(them), on any thread, has
+   *  each of those arrays allocated and its pages touched, so copy-assigning this tree to it
+   *  allocates nothing: copying into new pages is mostly the kernel faulting them in. */
+  std::vector<size_t> array_sizes() const;
+  static TriangleBvh with_room_for(const std::vector<size_t>& sizes);
+
  private:
   struct Node {
     glm::vec3 lo, hi;
@@ -110,6 +117,14 @@ class TriangleBvh {
   std::vector<uint32_t> growing_, loose_, tightening_;
   std::vector<std::vector<uint32_t>> by_depth_;
   mutable std::vector<uint32_t> stack_;
+
+  // The uint32_t arrays a copy carries, in one order for array_sizes and with_room_for.
+  template <typename Tree>
+  static auto uint32_arrays(Tree& t) {
+    return std::array{&t.order_,       &t.parent_,        &t.owned_,
+                      &t.owned_begin_, &t.vertex_leaves_, &t.vertex_leaves_begin_,
+                      &t.growing_,     &t.loose_,         &t.tightening_};
+  }
 };
 
 template <typename Visit>

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <memory>
 
+#include "abi_error.h"
 #include "icosphere.h"
 
 namespace {
@@ -16,8 +17,29 @@ struct MeshDeleter {
 };
 using MeshHandle = std::unique_ptr<csc_mesh, MeshDeleter>;
 
-std::string abi_error(const char* what, csc_status status) {
-  return std::string(what) + ": " + csc_status_str(status) + ": " + csc_last_error();
+csc_mesh* make_csc_mesh(std::span<const float> positions, std::span<const uint32_t> triangles,
+                        const std::vector<MeshChannel>& channels, std::string& error) {
+  std::vector<csc_channel_desc> descs;
+  std::vector<const float*> values;
+  for (const MeshChannel& channel : channels) {
+    descs.push_back({channel.name.c_str(), channel.width, channel.linearisation, channel.min_value,
+                     channel.max_value});
+    values.push_back(channel.values.data());
+  }
+  csc_mesh_desc desc = CSC_MESH_DESC_INIT;
+  desc.vertex_count = static_cast<uint32_t>(positions.size() / 3);
+  desc.positions = positions.data();
+  desc.triangle_count = static_cast<uint32_t>(triangles.size() / 3);
+  desc.triangles = triangles.data();
+  desc.channel_count = static_cast<uint32_t>(channels.size());
+  desc.channels = descs.data();
+  desc.channel_values = values.data();
+  csc_mesh* mesh = nullptr;
+  if (csc_status s = csc_mesh_create(&mesh, &desc); s != CSC_OK) {
+    error = abi_error("cannot make a mesh of the edited arrays", s);
+    return nullptr;
+  }
+  return mesh;
 }
 
 }  // namespace
@@ -101,28 +123,12 @@ void MeshDocument::find_material_channels() {
   }
 }
 
+csc_mesh* MeshContent::to_csc_mesh(std::string& error) const {
+  return make_csc_mesh(positions, triangles, channels, error);
+}
+
 csc_mesh* MeshDocument::to_csc_mesh(std::string& error) const {
-  std::vector<csc_channel_desc> descs;
-  std::vector<const float*> values;
-  for (const MeshChannel& channel : channels) {
-    descs.push_back({channel.name.c_str(), channel.width, channel.linearisation, channel.min_value,
-                     channel.max_value});
-    values.push_back(channel.values.data());
-  }
-  csc_mesh_desc desc = CSC_MESH_DESC_INIT;
-  desc.vertex_count = vertex_count();
-  desc.positions = positions.data();
-  desc.triangle_count = triangle_count();
-  desc.triangles = triangles.data();
-  desc.channel_count = static_cast<uint32_t>(channels.size());
-  desc.channels = descs.data();
-  desc.channel_values = values.data();
-  csc_mesh* mesh = nullptr;
-  if (csc_status s = csc_mesh_create(&mesh, &desc); s != CSC_OK) {
-    error = abi_error("cannot make a mesh of the edited arrays", s);
-    return nullptr;
-  }
-  return mesh;
+  return make_csc_mesh(positions, triangles, channels, error);
 }
 
 bool MeshDocument::save(const std::string& path, std::string& error) const {

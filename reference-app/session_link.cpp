@@ -6,8 +6,9 @@ constexpr size_t kMaxNotes = 4;
 
 }  // namespace
 
-void SessionLink::host(csc_mesh* mesh, PeerSettings settings) {
-  worker_ = std::make_unique<SessionWorker>(mesh, std::move(settings));
+void SessionLink::host(MeshContent content, TriangleBvh bvh, PeerSettings settings) {
+  worker_ =
+      std::make_unique<SessionWorker>(std::move(content), std::move(bvh), std::move(settings));
   joined_ = true;
   starting_host_ = true;
   view_ = worker_->view();

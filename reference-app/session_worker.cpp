@@ -5,6 +5,8 @@
 #include <cstring>
 #include <utility>
 
+#include "abi_error.h"
+
 namespace {
 
 constexpr size_t kMaxMessages = 8;
@@ -15,10 +17,6 @@ constexpr auto kViewEvery = std::chrono::milliseconds(50);
 // A cursor not heard of for this long is hidden (its sender resends every second while it
 // hovers, so this is a stalled or departed peer).
 constexpr uint32_t kStaleCursorMs = 2000;
-
-std::string abi_error(const char* what, csc_status status) {
-  return std::string(what) + ": " + csc_status_str(status) + ": " + csc_last_error();
-}
 
 // Points into `settings`, which outlives the call it is made for.
 csc_session_options session_options(const PeerSettings& settings) {
@@ -115,8 +113,9 @@ MeshArrays MeshArrays::of(const csc_mesh* mesh) {
 
 // ---- SessionWorker: the UI thread's side ----------------------------------------------------
 
-SessionWorker::SessionWorker(csc_mesh* mesh, PeerSettings settings)
-    : host_mesh_(mesh), settings_(std::move(settings)) {
+SessionWorker::SessionWorker(MeshContent content, TriangleBvh bvh, PeerSettings settings)
+    : host_content_(std::move(content)), settings_(std::move(settings)) {
+  handed_bvh_ = std::make_unique<TriangleBvh>(std::move(bvh));  // its positions: create()
   local_view_.status = "starting a session...";
   view_ = local_view_;
   thread_ = std::thread([this] { run({}); });
@@ -137,7 +136,6 @@ SessionWorker::~SessionWorker() {
   wake_.notify_one();
   thread_.join();
   csc_mesh_destroy(joined_mesh_);
-  csc_mesh_destroy(host_mesh_);
 }
 
 int SessionWorker::state(std::string& error) const {
@@ -227,21 +225,31 @@ void SessionWorker::run(std::string invite) {
   finish();
 }
 
-// Hosting: the mirror, what the UI shows and the normals' topology are the mesh's (the
-// document's values, copied into it when Host was clicked), then the session is made on it.
+// Hosting: the session's mesh is made of the document's arrays as they were when Host was
+// clicked; the mirror, what the UI shows and the normals' topology are that mesh's.
 bool SessionWorker::create() {
-  mirror_ = MeshArrays::of(host_mesh_);
-  shown_ = mirror_;
-  const uint32_t* corners = csc_mesh_triangles(host_mesh_);
-  normals_.set_topology({corners, corners + 3 * size_t{csc_mesh_triangle_count(host_mesh_)}},
-                        mirror_.vertex_count());
-  const csc_session_options options = session_options(settings_);
+  std::string error;
+  csc_mesh* mesh = host_content_.to_csc_mesh(error);
+  {
+    std::lock_guard lock(mutex_);
+    handed_bvh_positions_ = std::move(host_content_.positions);  // what the BVH is tight over
+  }
+  host_content_ = {};  // the mesh holds the arrays now
   csc_session* session = nullptr;
-  const csc_status s = csc_session_create(&session, host_mesh_, &options);
-  csc_mesh_destroy(std::exchange(host_mesh_, nullptr));
+  if (mesh) {
+    mirror_ = MeshArrays::of(mesh);
+    shown_ = mirror_;
+    const uint32_t* corners = csc_mesh_triangles(mesh);
+    normals_.set_topology({corners, corners + 3 * size_t{csc_mesh_triangle_count(mesh)}},
+                          mirror_.vertex_count());
+    const csc_session_options options = session_options(settings_);
+    if (csc_status s = csc_session_create(&session, mesh, &options); s != CSC_OK)
+      error = abi_error("cannot host a session", s);
+    csc_mesh_destroy(mesh);
+  }
   std::lock_guard lock(mutex_);
-  if (s != CSC_OK) {
-    error_ = abi_error("cannot host a session", s);
+  if (!session) {
+    error_ = error;
     state_ = -1;
     return false;
   }

@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "bvh.h"
+#include "mesh_document.h"
 #include "version_normals.h"
 
 /** The arrays of a mesh as the app keeps them: positions, then each channel's values. */
@@ -99,10 +100,11 @@ struct PeerSettings {
 
 class SessionWorker {
  public:
-  /** Starts hosting a session on `mesh` (owned from here; the document's values):
-   *  the worker creates it (one hierarchy build: hundreds of milliseconds at 320K faces, which
-   *  on the UI thread made a click on Host a frame that long). */
-  SessionWorker(csc_mesh* mesh, PeerSettings settings);
+  /** Starts hosting a session on the document's arrays, `content`: the worker makes the mesh
+   *  and the session of it (one hierarchy build: hundreds of milliseconds at 320K faces, which
+   *  on the UI thread made a click on Host a frame that long). `bvh` is the UI's, tight over
+   *  content.positions. */
+  SessionWorker(MeshContent content, TriangleBvh bvh, PeerSettings settings);
   /** Starts joining `invite` on the worker; joined() and take_joined_mesh() tell the result. */
   SessionWorker(std::string invite, PeerSettings settings);
   ~SessionWorker();  // leaves the session and stops the thread
@@ -164,7 +166,7 @@ class SessionWorker {
 
   // the worker's own state
   csc_session* session_ = nullptr;
-  csc_mesh* host_mesh_ = nullptr;  // hosting: what the session is created on, until it is
+  MeshContent host_content_;  // hosting: what the session is created on, until it is
   PeerSettings settings_;
   MeshArrays mirror_, shown_;  // the session's side; what the UI's document holds
   VersionNormals normals_;
