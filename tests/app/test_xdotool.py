@@ -2,8 +2,10 @@
 Xvfb. A left drag across the sphere sculpts it (the saved mesh differs from the untouched one,
 outwards, as the draw brush does); a click on the panel's "Host a session" button hosts (the
 app prints its INVITE line); ticking "Pressure -> radius" narrows a light pen's stroke; a
-click on Leave takes an app out of its session with the session's mesh kept. Two apps side by side: host by a click, "Copy invite", paste it
-(Ctrl+V) into the other's invite field and click "Join": they are in one session."""
+click on Leave takes an app out of its session with the session's mesh kept, and a click on
+Host then hosts a session of its own on it. Two apps side by side: host by a click (having
+unticked "Other machines can join"), "Copy invite", paste it (Ctrl+V) into the other's invite
+field and click "Join": they are in one session, through this machine's loopback address."""
 import os
 import queue
 import shutil
@@ -97,7 +99,7 @@ class RealPointer(unittest.TestCase):
         self.assertGreater(ticked, 10)
         self.assertLess(ticked, 0.6 * unticked)
 
-    def test_leave_by_click_keeps_the_mesh_and_the_host_sees_it_go(self):
+    def test_leave_by_click_keeps_the_mesh_the_host_sees_it_go_and_hosting_again_works(self):
         # 640 px wide: the Session panel starts at x = 330; in a session its first row holds
         # Copy invite and Leave (at x = 451).
         directory = temp_dir(self)
@@ -111,12 +113,20 @@ class RealPointer(unittest.TestCase):
         self.click(window, 451, 63)  # Leave
         host_out, host_err = host.communicate(timeout=90)
         self.assertEqual(host.returncode, 0, host_err)
-        out, err = joiner.communicate(timeout=90)
-        self.assertEqual(joiner.returncode, 0, err)
-        self.assertNotIn("SESSION ", out)  # it quit outside the session
         # The joiner was still running when the host quit (10 s against 14), yet no longer a
         # member: it said goodbye.
-        self.assertIn("members=1 ", next(line for line in host_out.splitlines() if line.startswith("SESSION ")))
+        host_session = next(line for line in host_out.splitlines() if line.startswith("SESSION "))
+        self.assertIn("members=1 ", host_session)
+        # Out of the session, it hosts one of its own on the mesh it kept (the copy for it is
+        # prepared anew for that mesh's shape).
+        self.click(window, 390, 63)  # Host a session
+        out, err = joiner.communicate(timeout=90)
+        self.assertEqual(joiner.returncode, 0, err)
+        self.assertIn("INVITE csculpt1:", out)
+        own_session = next(line for line in out.splitlines() if line.startswith("SESSION "))
+        self.assertIn("members=1 ", own_session)
+        fields = dict(field.split("=", 1) for field in own_session.split()[1:])
+        self.assertEqual(fields["merger"], fields["id"])  # its own session: it merges
         self.assertGreater(len(moved_vertices(Mesh(base), Mesh(kept))), 50)  # the session's mesh kept
 
     def start(self, *args):
