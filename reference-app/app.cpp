@@ -79,6 +79,7 @@ int run_app(const AppOptions& options) {
 }
 
 App::~App() {
+  preparing_.reset();  // its thread may be filling buffers in the upload window's context
   if (imgui_ready_) {
     ImGui_ImplOpenGL3_Shutdown();
     ImGui_ImplGlfw_Shutdown();
@@ -86,6 +87,7 @@ App::~App() {
   }
   if (window_) {
     renderer_.release();  // its GL objects need the context: free them while it exists
+    if (upload_window_) glfwDestroyWindow(upload_window_);
     glfwDestroyWindow(window_);
   }
   glfwTerminate();
@@ -100,6 +102,11 @@ bool App::open_window() {
   glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
   window_ = glfwCreateWindow(options_.width, options_.height, "cSculpt", nullptr, nullptr);
   if (!window_) return false;
+  // Hidden, its context sharing the window's objects: a joined mesh's buffers are filled in
+  // it on the preparation's thread (mesh_preparation.h). Without it they are filled here.
+  glfwWindowHint(GLFW_VISIBLE, GLFW_FALSE);
+  upload_window_ = glfwCreateWindow(1, 1, "cSculpt uploads", nullptr, window_);
+  glfwWindowHint(GLFW_VISIBLE, GLFW_TRUE);
   glfwMakeContextCurrent(window_);
   glfwSwapInterval(options_.bench_frames > 0 ? 0 : 1);
   glfwSetWindowUserPointer(window_, this);
@@ -158,11 +165,21 @@ void App::finish_join() {
   }
   document_ = std::move(prepared.document);
   bvh_ = std::move(prepared.bvh);
-  arrays_changed(std::move(prepared.clusters));
+  arrays_changed(std::move(prepared.clusters), prepared.buffers);
   session_.hand_bvh(std::move(prepared.worker_bvh), std::move(prepared.worker_positions));
   session_.adopted();
   join_ms_ =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+// Fills a joined mesh's GL buffers on the preparation's thread, in the upload window's context.
+std::function<void(PreparedMesh&)> App::buffer_filler() const {
+  if (!upload_window_) return {};
+  return [window = upload_window_](PreparedMesh& prepared) {
+    glfwMakeContextCurrent(window);
+    prepared.buffers = Renderer::fill_buffers(prepared.document, prepared.clusters);
+    glfwMakeContextCurrent(nullptr);
+  };
 }
 
 // After the document got new arrays (open, the built-in sphere): everything derived from
@@ -175,11 +192,15 @@ void App::layout_changed() {
 }
 
 // What derives from the document's arrays but the BVH: strokes, undo, the GPU's copy (drawn
-// in `clusters`, built for these arrays), the camera's framing.
-void App::arrays_changed(DrawClusters clusters) {
+// in `clusters`, built for these arrays; in `buffers` if they were filled already), the
+// camera's framing.
+void App::arrays_changed(DrawClusters clusters, MeshBuffers buffers) {
   sculptor_.reset();
   history_.reset(document_);
-  renderer_.upload_mesh(document_, std::move(clusters));
+  if (buffers.index)
+    renderer_.adopt_mesh(document_, std::move(clusters), buffers);
+  else
+    renderer_.upload_mesh(document_, std::move(clusters));
   // Frame the mesh: its bounding box's centre and half diagonal.
   glm::vec3 lo(INFINITY), hi(-INFINITY);
   for (size_t i = 0; i < document_.positions.size(); i += 3)
@@ -261,7 +282,10 @@ void App::session_tick() {
     std::string error;
     const int joined = session_.poll_join(error);
     if (joined < 0) report(error);
-    if (joined > 0) preparing_ = std::make_unique<MeshPreparation>(session_.take_joined_mesh());
+    if (joined > 0) {
+      preparing_.reset();  // one preparation at a time: the upload context is current on one thread
+      preparing_ = std::make_unique<MeshPreparation>(session_.take_joined_mesh(), buffer_filler());
+    }
   }
   if (preparing_ && preparing_->ready()) finish_join();
   if (!session_.active()) return;

@@ -8,6 +8,7 @@
 #include <glm/vec3.hpp>
 
 #include <array>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -65,7 +66,8 @@ class App final : public InputHandlers {
   bool open_window();
   void open_start_mesh();
   void layout_changed();
-  void arrays_changed(DrawClusters clusters);
+  void arrays_changed(DrawClusters clusters, MeshBuffers buffers = {});
+  std::function<void(PreparedMesh&)> buffer_filler() const;
   void finish_join();
   bool frame();
   bool busy() const;
@@ -109,6 +111,7 @@ class App final : public InputHandlers {
 
   AppOptions options_;
   GLFWwindow* window_ = nullptr;
+  GLFWwindow* upload_window_ = nullptr;  // hidden, sharing window_'s GL objects (a join's buffers)
   // The window's size in screen coordinates, kept by its callback: asking X11 for it
   // (glfwGetWindowSize) is a round trip to the server, twice per brush dab otherwise.
   int window_width_ = 0, window_height_ = 0;

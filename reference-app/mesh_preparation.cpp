@@ -2,7 +2,8 @@
 
 #include <utility>
 
-MeshPreparation::MeshPreparation(csc_mesh* mesh) : mesh_(mesh), thread_([this] { prepare(); }) {}
+MeshPreparation::MeshPreparation(csc_mesh* mesh, std::function<void(PreparedMesh&)> finish)
+    : mesh_(mesh), finish_(std::move(finish)), thread_([this] { prepare(); }) {}
 
 MeshPreparation::~MeshPreparation() {
   if (thread_.joinable()) thread_.join();
@@ -20,6 +21,7 @@ void MeshPreparation::prepare() {
     prepared_.clusters.build(d.positions, d.triangles);
     prepared_.worker_bvh = prepared_.bvh;
     prepared_.worker_positions = d.positions;
+    if (finish_) finish_(prepared_);
   }
   ready_.store(true, std::memory_order_release);
 }

@@ -3,13 +3,52 @@
 #include <glm/gtc/type_ptr.hpp>
 #include <glm/matrix.hpp>
 
+#include <algorithm>
+#include <array>
 #include <cstdint>
+#include <iterator>
 
 namespace {
 
 // Merge runs of changed vertices separated by fewer unchanged ones than this: one larger
 // glBufferSubData is cheaper than many tiny ones.
 constexpr uint32_t kRunGap = 32;
+
+// Floats per vertex of each attribute: position, normal, albedo, roughness, metallic.
+constexpr GLint kWidths[] = {3, 3, 3, 1, 1};
+
+// Each attribute's values in the document; `constant` stands in for a channel it lacks.
+std::array<const float*, 5> attribute_values(const MeshDocument& document,
+                                             const std::vector<float>& constant) {
+  auto channel = [&](int index) {
+    return index >= 0 ? document.channels[index].values.data() : constant.data();
+  };
+  return {document.positions.data(), document.normals.data(), channel(document.albedo),
+          channel(document.roughness), channel(document.metallic)};
+}
+
+// Fills the index buffer with the clusters' triangles (bound to a target no vertex array owns:
+// this may run in a context of another thread, with no vertex array bound).
+void fill_indices(GLuint buffer, const DrawClusters& clusters) {
+  glBindBuffer(GL_COPY_WRITE_BUFFER, buffer);
+  glBufferData(GL_COPY_WRITE_BUFFER,
+               static_cast<GLsizeiptr>(clusters.draw_order().size() * sizeof(uint32_t)),
+               clusters.draw_order().data(), GL_STATIC_DRAW);
+  glBindBuffer(GL_COPY_WRITE_BUFFER, 0);
+}
+
+// Fills the attribute buffers `buffers` with the document's values (glBufferData: new storage).
+void fill_attributes(const GLuint* buffers, const MeshDocument& document,
+                     const std::vector<float>& constant) {
+  const std::array<const float*, 5> data = attribute_values(document, constant);
+  for (size_t a = 0; a < data.size(); ++a) {
+    glBindBuffer(GL_ARRAY_BUFFER, buffers[a]);
+    glBufferData(GL_ARRAY_BUFFER,
+                 static_cast<GLsizeiptr>(size_t{document.vertex_count()} *
+                                         static_cast<size_t>(kWidths[a]) * sizeof(float)),
+                 data[a], GL_DYNAMIC_DRAW);
+  }
+}
 
 constexpr const char* kVertexShader = R"(#version 330 core
 layout(location = 0) in vec3 a_position;
@@ -116,25 +155,50 @@ bool Renderer::init(std::string& error) {
   glGenVertexArrays(1, &vao_);
   glGenBuffers(kAttributeCount, buffers_);
   glGenBuffers(1, &index_buffer_);
+  attach_buffers();
+  return true;
+}
+
+void Renderer::attach_buffers() {
   glBindVertexArray(vao_);
-  const GLint widths[kAttributeCount] = {3, 3, 3, 1, 1};
   for (GLuint a = 0; a < kAttributeCount; ++a) {
     glBindBuffer(GL_ARRAY_BUFFER, buffers_[a]);
-    glVertexAttribPointer(a, widths[a], GL_FLOAT, GL_FALSE, 0, nullptr);
+    glVertexAttribPointer(a, kWidths[a], GL_FLOAT, GL_FALSE, 0, nullptr);
     glEnableVertexAttribArray(a);
   }
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, index_buffer_);
   glBindVertexArray(0);
-  return true;
+}
+
+MeshBuffers Renderer::fill_buffers(const MeshDocument& document, const DrawClusters& clusters) {
+  MeshBuffers out;
+  glGenBuffers(1, &out.index);
+  glGenBuffers(kAttributeCount, out.attributes);
+  fill_indices(out.index, clusters);
+  const std::vector<float> constant(size_t{document.vertex_count()} * 3, 0.5f);
+  fill_attributes(out.attributes, document, constant);
+  glFinish();
+  return out;
+}
+
+void Renderer::adopt_mesh(const MeshDocument& document, DrawClusters clusters,
+                          MeshBuffers buffers) {
+  clusters_ = std::move(clusters);
+  glDeleteBuffers(kAttributeCount, buffers_);
+  glDeleteBuffers(1, &index_buffer_);
+  index_buffer_ = buffers.index;
+  std::copy(std::begin(buffers.attributes), std::end(buffers.attributes), buffers_);
+  attach_buffers();
+  index_count_ = static_cast<GLsizei>(document.triangles.size());
+  colour_overridden_ = false;
+  vertex_count_ = document.vertex_count();
+  upload_marks_.resize(vertex_count_);
+  uploaded_last_ = vertex_count_;
 }
 
 void Renderer::upload_mesh(const MeshDocument& document, DrawClusters clusters) {
   clusters_ = std::move(clusters);
-  glBindVertexArray(vao_);
-  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, index_buffer_);
-  glBufferData(GL_ELEMENT_ARRAY_BUFFER,
-               static_cast<GLsizeiptr>(clusters_.draw_order().size() * sizeof(uint32_t)),
-               clusters_.draw_order().data(), GL_STATIC_DRAW);
-  glBindVertexArray(0);
+  fill_indices(index_buffer_, clusters_);
   index_count_ = static_cast<GLsizei>(document.triangles.size());
   upload_values(document);
 }
@@ -144,19 +208,7 @@ void Renderer::upload_values(const MeshDocument& document) {
   vertex_count_ = document.vertex_count();
   upload_marks_.resize(vertex_count_);
   constant_.assign(size_t{vertex_count_} * 3, 0.5f);
-  auto channel_data = [&](int index) {
-    return index >= 0 ? document.channels[index].values.data() : constant_.data();
-  };
-  const float* data[kAttributeCount] = {
-      document.positions.data(), document.normals.data(), channel_data(document.albedo),
-      channel_data(document.roughness), channel_data(document.metallic)};
-  const size_t widths[kAttributeCount] = {3, 3, 3, 1, 1};
-  for (int a = 0; a < kAttributeCount; ++a) {
-    glBindBuffer(GL_ARRAY_BUFFER, buffers_[a]);
-    glBufferData(GL_ARRAY_BUFFER,
-                 static_cast<GLsizeiptr>(vertex_count_ * widths[a] * sizeof(float)), data[a],
-                 GL_DYNAMIC_DRAW);
-  }
+  fill_attributes(buffers_, document, constant_);
   uploaded_last_ = vertex_count_;
 }
 

@@ -11,6 +11,7 @@
 
 #include "draw_clusters.h"
 #include "marks.h"
+#include "mesh_buffers.h"
 #include "mesh_document.h"
 
 struct ViewSettings {
@@ -33,6 +34,13 @@ class Renderer {
    *  triangles (DrawClusters::build, which a caller may run on another thread: it is tens of
    *  milliseconds at 320K faces), then every vertex value uploaded. */
   void upload_mesh(const MeshDocument& document, DrawClusters clusters);
+  /** Makes and fills a mesh's buffers in the current context, which may be another thread's
+   *  sharing this one's objects: llvmpipe copies the data into new memory in the call, and at
+   *  1M vertices that is hundreds of milliseconds, mostly pages faulted in. Ends with
+   *  glFinish, so the buffers are complete for every context. */
+  static MeshBuffers fill_buffers(const MeshDocument& document, const DrawClusters& clusters);
+  /** upload_mesh() with buffers fill_buffers() made: they replace the drawn ones. */
+  void adopt_mesh(const MeshDocument& document, DrawClusters clusters, MeshBuffers buffers);
   /** Uploads every vertex value again (the same triangles). */
   void upload_values(const MeshDocument& document);
   /** Uploads `vertices` (unique, any order) as a few contiguous glBufferSubData runs. Called
@@ -48,7 +56,11 @@ class Renderer {
 
  private:
   enum Attribute { kPosition, kNormal, kAlbedo, kRoughness, kMetallic, kAttributeCount };
+  static_assert(sizeof(MeshBuffers::attributes) / sizeof(unsigned) == kAttributeCount);
+  static_assert(sizeof(GLuint) == sizeof(unsigned));
   void upload_range(const MeshDocument& document, uint32_t first, uint32_t count);
+  /** Points the vertex array's attributes at buffers_ and its indices at index_buffer_. */
+  void attach_buffers();
   /** The visible clusters' index ranges for this draw (drawn once, or twice for wireframe). */
   void find_visible(const glm::mat4& view, const glm::mat4& projection, bool cull_back_faces);
   void draw_visible() const;

@@ -32,7 +32,7 @@ invite=$(sed -n 's/^INVITE //p' "$work/host.out")
 "$app" --size 1000x720 --join "$invite" --replay "$work/join.replay" --exit-after 28 > "$work/join.out" &
 joiner=$!
 # Without a window manager both windows open at (0, 0): put the joiner's on the right.
-window=$(xdotool search --sync --pid "$joiner" | head -1)
+window=$(xdotool search --sync --onlyvisible --pid "$joiner" | head -1)
 xdotool windowmove "$window" 1000 0
 sleep 18  # both replays done, a few merges later
 import -window root "$out"

@@ -70,7 +70,7 @@ class DrawOnDemand(unittest.TestCase):
     def test_the_brush_ring_follows_a_real_pointer(self):
         app = self.start("--exit-after", "8")
         self.assertEqual(app.stdout.readline().strip(), "READY")
-        window = xdotool("search", "--sync", "--pid", app.pid).split()[0]
+        window = xdotool("search", "--sync", "--onlyvisible", "--pid", app.pid).split()[0]
         xdotool("mousemove", "--window", window, 560, 400)
         time.sleep(1.0)
         before = window_pixels(window, 500, 340, 240, 120)
@@ -88,7 +88,7 @@ class DrawOnDemand(unittest.TestCase):
         invite = host.stdout.readline().strip()
         self.assertTrue(invite.startswith("INVITE "), invite)
         self.assertEqual(host.stdout.readline().strip(), "READY")
-        window = xdotool("search", "--sync", "--pid", host.pid).split()[0]
+        window = xdotool("search", "--sync", "--onlyvisible", "--pid", host.pid).split()[0]
         xdotool("mousemove", "--window", window, 1275, 795)  # off the mesh, then untouched
         time.sleep(1.0)
         whole = (0, 0, 1280, 800)

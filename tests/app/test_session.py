@@ -15,8 +15,8 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(__file__))
-from applib import (APP, TEST_SPHERE, Mesh, Replay, assert_normals_current, changed_in,  # noqa: E402
-                    moved_vertices, run_app, start_host, temp_dir)
+from applib import (APP, TEST_SPHERE, Mesh, Picture, Replay, assert_normals_current,  # noqa: E402
+                    changed_in, moved_vertices, run_app, start_host, temp_dir)
 
 
 def machine_ipv4s():
@@ -43,11 +43,13 @@ class TwoApps(unittest.TestCase):
         join_replay = (Replay().wait("session").key("b").drag((640, 320), (640, 480))
                        .key("i").drag((660, 330), (660, 470)).write(directory, "join.replay"))
         host_ply, join_ply = os.path.join(directory, "host.ply"), os.path.join(directory, "join.ply")
+        host_png, join_png = os.path.join(directory, "host.png"), os.path.join(directory, "join.png")
 
         host, invite = start_host(self, *TEST_SPHERE, "--replay", host_replay, "--exit-after", "14",
-                                  "--save", host_ply)
-        joiner = subprocess.run([APP, "--join", invite, "--replay", join_replay,
-                                 "--exit-after", "9", "--save", join_ply], capture_output=True, text=True, timeout=90)
+                                  "--save", host_ply, "--screenshot", host_png)
+        joiner = subprocess.run([APP, "--join", invite, "--replay", join_replay, "--exit-after", "9",
+                                 "--save", join_ply, "--screenshot", join_png],
+                                capture_output=True, text=True, timeout=90)
         self.assertEqual(joiner.returncode, 0, joiner.stderr)
         host_out, host_err = host.communicate(timeout=90)
         self.assertEqual(host.returncode, 0, host_err)
@@ -55,6 +57,14 @@ class TwoApps(unittest.TestCase):
 
         with open(host_ply, "rb") as a, open(join_ply, "rb") as b:
             self.assertEqual(a.read(), b.read(), "the two apps ended with different meshes")
+        # The joiner draws the joined mesh from the buffers its preparation thread filled: above
+        # the strokes and the cursors, the two windows show the same surface.
+        host_picture, join_picture = Picture(host_png), Picture(join_png)
+        surface = host_picture.mean_rgb(600, 180, 680, 240)
+        background = host_picture.mean_rgb(1240, 760, 1270, 790)
+        self.assertGreater(max(abs(a - b) for a, b in zip(surface, background)), 30, "no mesh drawn")
+        joined = join_picture.mean_rgb(600, 180, 680, 240)
+        self.assertLess(max(abs(a - b) for a, b in zip(surface, joined)), 3, (surface, joined))
         assert_normals_current(self, host_out)  # normals computed on the session worker
         assert_normals_current(self, joiner.stdout)
         before, after = Mesh(base), Mesh(host_ply)

@@ -88,7 +88,7 @@ class RealPointer(unittest.TestCase):
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         self.addCleanup(lambda: app.poll() is None and app.kill())
         self.assertEqual(app.stdout.readline().strip(), "READY")
-        window = xdotool("search", "--sync", "--pid", app.pid).split()[0]
+        window = xdotool("search", "--sync", "--onlyvisible", "--pid", app.pid).split()[0]
         self.click(window, *PRESSURE_RADIUS_BOX)
         xdotool("mousemove", "--window", window, 640, 760)  # off the panels: the replay draws
         _, err = app.communicate(timeout=120)
@@ -136,7 +136,7 @@ class RealPointer(unittest.TestCase):
         self.addCleanup(app.stderr.close)
         self.addCleanup(app.stdout.close)
         self.assertEqual(app.stdout.readline().strip(), "READY")
-        return app, xdotool("search", "--sync", "--pid", app.pid).split()[0]
+        return app, xdotool("search", "--sync", "--onlyvisible", "--pid", app.pid).split()[0]
 
     def click(self, window, x, y):
         # No window manager under Xvfb: focus by hand (ImGui 1.86 reads the pointer of the
