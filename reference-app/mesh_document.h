@@ -21,8 +21,8 @@ struct MeshChannel {
 };
 
 /** The arrays a csc_mesh is made of, copied out of a document: hosting hands them to the
- *  session worker, which makes the mesh off the UI thread (at 320K faces, making it took the
- *  UI thread 20 ms; copying the arrays takes a few). */
+ *  session worker, which makes the mesh (csc_mesh_create copies and checks them again) off the
+ *  UI thread. */
 struct MeshContent {
   std::vector<float> positions;
   std::vector<uint32_t> triangles;

@@ -17,16 +17,6 @@ constexpr uint32_t kRunGap = 32;
 // Floats per vertex of each attribute: position, normal, albedo, roughness, metallic.
 constexpr GLint kWidths[] = {3, 3, 3, 1, 1};
 
-// Each attribute's values in the document; `constant` stands in for a channel it lacks.
-std::array<const float*, 5> attribute_values(const MeshDocument& document,
-                                             const std::vector<float>& constant) {
-  auto channel = [&](int index) {
-    return index >= 0 ? document.channels[index].values.data() : constant.data();
-  };
-  return {document.positions.data(), document.normals.data(), channel(document.albedo),
-          channel(document.roughness), channel(document.metallic)};
-}
-
 // Fills the index buffer with the clusters' triangles (bound to a target no vertex array owns:
 // this may run in a context of another thread, with no vertex array bound).
 void fill_indices(GLuint buffer, const DrawClusters& clusters) {
@@ -38,9 +28,17 @@ void fill_indices(GLuint buffer, const DrawClusters& clusters) {
 }
 
 // Fills the attribute buffers `buffers` with the document's values (glBufferData: new storage).
+// A material channel the mesh lacks is drawn as 0.5, from `constant`, filled only then.
 void fill_attributes(const GLuint* buffers, const MeshDocument& document,
-                     const std::vector<float>& constant) {
-  const std::array<const float*, 5> data = attribute_values(document, constant);
+                     std::vector<float>& constant) {
+  if (document.albedo < 0 || document.roughness < 0 || document.metallic < 0)
+    constant.assign(size_t{document.vertex_count()} * 3, 0.5f);
+  auto channel = [&](int index) {
+    return index >= 0 ? document.channels[index].values.data() : constant.data();
+  };
+  const std::array<const float*, std::size(kWidths)> data = {
+      document.positions.data(), document.normals.data(), channel(document.albedo),
+      channel(document.roughness), channel(document.metallic)};
   for (size_t a = 0; a < data.size(); ++a) {
     glBindBuffer(GL_ARRAY_BUFFER, buffers[a]);
     glBufferData(GL_ARRAY_BUFFER,
@@ -175,7 +173,7 @@ MeshBuffers Renderer::fill_buffers(const MeshDocument& document, const DrawClust
   glGenBuffers(1, &out.index);
   glGenBuffers(kAttributeCount, out.attributes);
   fill_indices(out.index, clusters);
-  const std::vector<float> constant(size_t{document.vertex_count()} * 3, 0.5f);
+  std::vector<float> constant;
   fill_attributes(out.attributes, document, constant);
   glFinish();
   return out;
@@ -207,7 +205,6 @@ void Renderer::upload_values(const MeshDocument& document) {
   colour_overridden_ = false;
   vertex_count_ = document.vertex_count();
   upload_marks_.resize(vertex_count_);
-  constant_.assign(size_t{vertex_count_} * 3, 0.5f);
   fill_attributes(buffers_, document, constant_);
   uploaded_last_ = vertex_count_;
 }

@@ -5,6 +5,7 @@
 #include <epoxy/gl.h>
 #include <glm/mat4x4.hpp>
 
+#include <iterator>
 #include <span>
 #include <string>
 #include <vector>
@@ -56,7 +57,7 @@ class Renderer {
 
  private:
   enum Attribute { kPosition, kNormal, kAlbedo, kRoughness, kMetallic, kAttributeCount };
-  static_assert(sizeof(MeshBuffers::attributes) / sizeof(unsigned) == kAttributeCount);
+  static_assert(std::size(MeshBuffers{}.attributes) == kAttributeCount);
   static_assert(sizeof(GLuint) == sizeof(unsigned));
   void upload_range(const MeshDocument& document, uint32_t first, uint32_t count);
   /** Points the vertex array's attributes at buffers_ and its indices at index_buffer_. */

@@ -22,9 +22,9 @@ class SessionLink {
   SessionLink(const SessionLink&) = delete;
   SessionLink& operator=(const SessionLink&) = delete;
 
-  /** Starts hosting a session on a copy of the document's arrays in the background: the session is
-   * active at once (strokes are handed, and merged once it exists); poll_host() tells when it
-   * exists or failed. */
+  /** Starts hosting a session on a copy of the document's arrays in the background: the
+   *  session is active at once (strokes are handed, and merged once it exists); poll_host()
+   *  tells when it exists or failed. */
   void host(MeshContent content, TriangleBvh bvh, PeerSettings settings);
   /** While a hosted session is being created: 1, once, when it exists (invite() holds its
    *  invite), -1 when it could not be (`error`; the link is out of the session), 0 otherwise. */
