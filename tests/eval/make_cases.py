@@ -278,6 +278,18 @@ def held_object(kind):
     elif kind == "cubes":  # CubeHierarchy_248.blend: 11 separate boxes, each subdivided on its own
         bpy.ops.wm.open_mainfile(filepath=M + "BLEND/CubeHierarchy_248.blend")
         o = imported(lambda: None, None); o.modifiers.clear(); normalised(o); subdivided(o, 3)
+    elif kind == "keyboard":  # ComputerKeyboard.x3d: a case and dozens of box keys, each apart
+        import builtins, io_scene_x3d.import_x3d as x3d  # Blender 3.4's importer opens with 'rU',
+        x3d.open = lambda p, mode="r", **kw: builtins.open(p, mode.replace("U", ""), **kw)  # gone in 3.11
+        bpy.ops.import_scene.x3d(filepath=M + "X3D/ComputerKeyboard.x3d")
+        o = imported(lambda: None, None); welded(o); normalised(o)
+        s = o.modifiers.new("s", 'SUBSURF'); s.levels = 3; s.subdivision_type = 'SIMPLE'
+        bpy.ops.object.modifier_apply(modifier="s")  # flat boxes keep their shape, get vertices
+    elif kind == "huesitos":  # huesitos.fbx: a figure of bones, each a separate part
+        bpy.ops.import_scene.fbx(filepath=M + "FBX/huesitos.fbx")
+        for x in list(bpy.context.scene.objects):
+            if x.type != 'MESH': bpy.data.objects.remove(x)
+        o = imported(lambda: None, None); o.modifiers.clear(); welded(o); normalised(o); subdivided(o, 1)
     else:
         raise ValueError(kind)
     bpy.context.view_layer.objects.active = o; o.select_set(True)
@@ -478,6 +490,22 @@ def local_twist(obj, center, normal, radius, angle, depth=0.5):
     m.vertex_group = gname
     return m
 
+def lattice(obj, moves):
+    """a 3x3x3 Lattice around the mesh's bounding box (padded by a tenth), its points moved:
+    moves maps (i, j, k) in {0, 1, 2}^3 to an offset in the mesh's units"""
+    vs = [v.co for v in obj.data.vertices]
+    lo = mathutils.Vector([min(v[i] for v in vs) for i in range(3)])
+    hi = mathutils.Vector([max(v[i] for v in vs) for i in range(3)])
+    lat = bpy.data.lattices.new("lattice")
+    lat.points_u = lat.points_v = lat.points_w = 3
+    lo_ = bpy.data.objects.new("lattice", lat); bpy.context.scene.collection.objects.link(lo_)
+    lo_.location = (lo + hi) / 2; lo_.scale = (hi - lo) * 1.1
+    for (i, j, k), off in moves.items():
+        pt = lat.points[i + 3 * (j + 3 * k)]
+        pt.co_deform = pt.co_deform + mathutils.Vector([off[c] / lo_.scale[c] for c in range(3)])
+    m = obj.modifiers.new("lattice", 'LATTICE'); m.object = lo_
+    return m
+
 def near(o, p):
     """the base vertex nearest p: (position, Blender's normal)"""
     v = min(o.data.vertices, key=lambda v: (v.co - mathutils.Vector(p)).length)
@@ -626,6 +654,38 @@ elif which == "probe4":
     case("stretch_plus_pinch_human", "human",
          [lambda o: pinch(o, at("+x"), 0.25, 0.6),
           lambda o: simple(o, 'STRETCH', 0.3, 'Z')], "stack", details=[0])
+elif which == "probe5":
+    # meshes and deformers no other set uses: a keyboard of 99 separate thin parts, a Wave,
+    # a Lattice; scored by hand, not kept (size)
+    kb = lambda o: near(o, (0.1, 0.0, 0.2))[0]
+    case("cast_plus_detail_keyboard", "keyboard",
+         [lambda o: detail(o, kb(o), 0.3, 0.03, 100),
+          lambda o: cast(o, 0.3)], "stack", details=[0])
+    case("bend_plus_detail_keyboard", "keyboard",
+         [lambda o: detail(o, kb(o), 0.3, 0.03, 101),
+          lambda o: bend(o, math.radians(60), 'X')], "stack", details=[0])
+    case("disjoint_keyboard", "keyboard",
+         [lambda o: detail(o, near(o, (0.1, 0.6, 0.2))[0], 0.2, 0.03, 102),
+          lambda o: grab(o, near(o, (0.1, -0.6, 0.2))[0], plus(near(o, (0.1, -0.6, 0.2))[0], (0, 0, 0.1)), 0.3)],
+         "stack", details=[0])
+    case("grab_plus_detail_keyboard", "keyboard",
+         [lambda o: detail(o, kb(o), 0.3, 0.03, 103),
+          lambda o: grab(o, kb(o), plus(kb(o), (0.05, 0.1, 0.15)), 0.5)], "stack", details=[0])
+    case("wave_plus_detail_monkey", "monkey2",
+         [lambda o: detail(o, near(o, (0, -0.8, 0.4))[0], 0.3, 0.04, 104),
+          lambda o: wave(o, 0.1, 0.6)], "stack", details=[0])
+    case("lattice_plus_detail_monkey", "monkey2",
+         [lambda o: detail(o, near(o, (0, -0.8, 0.4))[0], 0.3, 0.04, 105),
+          lambda o: lattice(o, {(1, 0, 2): (0, -0.3, 0.2), (2, 0, 1): (0.2, -0.1, 0), (0, 2, 0): (-0.2, 0, -0.2)})],
+         "stack", details=[0])
+    case("lattice_plus_swirl_torus", "torus_lo",
+         [lambda o: local_twist(o, (1, 0, 0.3), (0, 0, 1), 0.25, math.radians(60)),
+          lambda o: lattice(o, {(2, 1, 1): (0.3, 0, 0.2), (2, 1, 2): (0.1, 0, 0.2), (1, 2, 1): (0, 0.2, 0)})],
+         "stack", details=[0])
+    case("three_artists_keyboard", "keyboard",
+         [lambda o: detail(o, kb(o), 0.25, 0.03, 106),
+          lambda o: pinch(o, near(o, (0.1, 0.5, 0.2))[0], 0.2, 0.6),
+          lambda o: twist(o, math.radians(40), 'Y')], "stack", details=[0, 1])
 elif which == "house":
     house_grab_case()
     case("cast_plus_detail_house", "house",
