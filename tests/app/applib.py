@@ -3,8 +3,10 @@ write replay files, read the PLY files it saves.
 
 The tests run inside `xvfb-run` (run_under_xvfb.sh); every app started here shares that
 display. Mesh statistics come from the saved PLY (csc_mesh_write, binary little endian)."""
+import fcntl
 import math
 import os
+import socket
 import struct
 import subprocess
 import tempfile
@@ -43,6 +45,21 @@ def start_host(test, *args, stderr=subprocess.PIPE):
     line = host.stdout.readline().strip()
     test.assertTrue(line.startswith("INVITE "), line)
     return host, line.split(" ", 1)[1]
+
+
+def machine_ipv4s():
+    """This machine's IPv4 addresses but loopback's (SIOCGIFADDR on each interface)."""
+    found = set()
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        for _, name in socket.if_nameindex():
+            try:
+                reply = fcntl.ioctl(s.fileno(), 0x8915, struct.pack("256s", name[:15].encode()))
+            except OSError:
+                continue  # down, or no IPv4 address
+            address = socket.inet_ntoa(reply[20:24])
+            if not address.startswith("127."):
+                found.add(address)
+    return found
 
 
 class Replay:

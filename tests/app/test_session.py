@@ -4,11 +4,8 @@ a paint and an inflate down), both save on exit. They must end with the same mes
 holding both artists' strokes. And when the hosting app is killed, the other carries on: it
 becomes the merger and its strokes are merged. An invite names an address of this machine that
 other machines reach, unless the artist keeps the session to this machine."""
-import fcntl
 import os
 import signal
-import socket
-import struct
 import subprocess
 import sys
 import time
@@ -16,22 +13,7 @@ import unittest
 
 sys.path.insert(0, os.path.dirname(__file__))
 from applib import (APP, TEST_SPHERE, Mesh, Picture, Replay, assert_normals_current,  # noqa: E402
-                    changed_in, moved_vertices, run_app, start_host, temp_dir)
-
-
-def machine_ipv4s():
-    """This machine's IPv4 addresses but loopback's (SIOCGIFADDR on each interface)."""
-    found = set()
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        for _, name in socket.if_nameindex():
-            try:
-                reply = fcntl.ioctl(s.fileno(), 0x8915, struct.pack("256s", name[:15].encode()))
-            except OSError:
-                continue  # down, or no IPv4 address
-            address = socket.inet_ntoa(reply[20:24])
-            if not address.startswith("127."):
-                found.add(address)
-    return found
+                    changed_in, machine_ipv4s, moved_vertices, run_app, start_host, temp_dir)
 
 
 class TwoApps(unittest.TestCase):

@@ -6,7 +6,9 @@ stroke, and a `csculpt peer` process joins and makes scripted strokes for two se
 moves and paints once both are in. After the app has left, they all end with the same mesh bit
 for bit: the session's mesh digest (peer/src/session.cpp's mesh_digest, meshdigest.py) of the
 app's saved PLY, of the add-on's session-side arrays (albedo as the session holds it, sRGB, not
-Blender's linear colours) and the peer's own, and the PLY's arrays equal Blender's.
+Blender's linear colours) and the peer's own, and the PLY's arrays equal Blender's. Blender
+listens on every interface (the add-on's default), and the others join through the address its
+invite names, as a colleague's machine would.
 
 Needs blender, csculpt-app (CSCULPT_APP), csculpt (CSCULPT_CLI) and an X display; skipped
 (77) without blender or a display."""
@@ -24,7 +26,7 @@ import meshdigest
 # The app's replay files and `csculpt peer`'s JSON lines, as the app and session tests use them.
 sys.path.insert(0, os.path.join(kit.HERE, "..", "app"))
 sys.path.insert(0, os.path.join(kit.HERE, "..", "session"))
-from applib import Replay  # noqa: E402
+from applib import Replay, machine_ipv4s  # noqa: E402
 from sessionlib import Peer  # noqa: E402
 
 exe = kit.blender_or_skip()
@@ -66,6 +68,10 @@ app_ply = work.file("app.ply")
 try:
     invite = wait_for("the invite from Blender", lambda: read_text("invite"), 40,
                       [("Blender", blender)])
+    # The add-on listens on every interface by default, so its invite names an address a
+    # colleague's machine reaches; the app and the peer join through it.
+    address = invite.rsplit("@tcp://", 1)[1].rsplit(":", 1)[0]
+    assert address in (machine_ipv4s() or {"127.0.0.1"}), f"the invite names {address}"
     # The app joins, waits for the session's mesh, then a Draw stroke across the sphere's
     # middle and a Paint stroke down through it. It leaves after 10 s (the peer's strokes
     # end 2 s after it joins, Blender's once both are in), settling its own first.

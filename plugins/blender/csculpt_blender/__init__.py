@@ -43,6 +43,11 @@ def prefs(context=None):
     return addon.preferences if addon else None
 
 
+# Every peer of a session is connected to by every other, so a host and its joiners alike
+# must listen where a colleague's machine reaches them.
+LISTEN_EVERYWHERE = "tcp://*:*"
+
+
 def _pref(name, default):
     p = prefs()
     return getattr(p, name, default) if p else default
@@ -306,7 +311,7 @@ def _start_watching():
 def _session_options():
     options = {"name": _pref("artist_name", "") or getpass.getuser(),
                "sync_ms": _pref("sync_ms", 250)}
-    bind = _pref("bind", "")
+    bind = _pref("bind", LISTEN_EVERYWHERE)
     if bind:
         options["bind"] = bind
     return options
@@ -594,9 +599,12 @@ class CsculptPreferences(bpy.types.AddonPreferences):
 
     artist_name: StringProperty(name="Your name", description="Shown to the other artists "
                                 "(empty: your login name)")
-    bind: StringProperty(name="Listen on", description="ZeroMQ endpoint others reach you at, "
-                         "e.g. tcp://0.0.0.0:* on a LAN (empty: this machine only, "
-                         "tcp://127.0.0.1:*)")
+    bind: StringProperty(name="Listen on", default=LISTEN_EVERYWHERE,
+                         description="ZeroMQ endpoint others reach you at. tcp://*:* listens on "
+                         "every interface, and an invite names this machine's address, so "
+                         "artists on other machines can join; tcp://127.0.0.1:* keeps the "
+                         "session on this machine; a fixed port (tcp://*:5670) suits a "
+                         "firewall. Empty: this machine only")
     sync_ms: IntProperty(name="Merge interval (ms)", default=250, min=10, max=60000)
     interval_ms: IntProperty(name="Sync timer (ms)", default=50, min=10, max=2000)
     join_timeout_s: FloatProperty(name="Join timeout (s)", default=10.0, min=0.5, max=300.0)
