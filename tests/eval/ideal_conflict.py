@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Can any merge meet both ideals' rules at once? An oracle check, no merge involved.
 
-usage: ideal_conflict.py CASES_DIR [CASES_DIR ...]
+usage: ideal_conflict.py [--pull CSCULPT_BIN] CASES_DIR [CASES_DIR ...]
 
 The rules ask, where a detail and a coarse edit meet: against ideal_frame.ply below "sum",
 and against ideal.ply within 1.5x "sum". Where the two ideals disagree (tapers, casts, grab
@@ -12,7 +12,12 @@ x(a) meets both rules, then the intersection over all cases, then the results of
 segment, pulled toward "sum" by b, that meet both rules everywhere. An empty intersection means
 that no method whose result lies between the two ideals meets both rules on every case; a
 method must then move toward "sum" and give up part of the frame ideal everywhere the
-deformation is not rigid (docs/merge-quality.md, "Limits")."""
+deformation is not rigid (docs/merge-quality.md, "Limits").
+
+With --pull, it prints instead, for every case where `full` (run by CSCULPT_BIN) misses the
+stack rule, the least pull toward "sum", x = full + b (sum - full) in steps of 0.05, that meets
+both rules, and what that x keeps of the frame ideal (its error as a share of sum's): what
+meeting the rule would cost `full` itself."""
 import os
 import sys
 
@@ -71,22 +76,58 @@ def interval(case):
     return (min(ok), max(ok)) if ok else (1.0, 0.0)
 
 
-def main():
-    lo, hi = 0.0, 1.0
-    conflicting = []
-    for d in sys.argv[1:]:
+def least_pull(binary, case_dir):
+    """(full's stack error over sum's, least b, frame share at b) for a case where full misses
+    the stack rule, else None."""
+    finest, stack, frame, plain = load(case_dir)
+    names = [n for n in artists.ARTISTS if os.path.exists(os.path.join(case_dir, n + ".ply"))]
+    full = artists.merge(binary, case_dir, names, "full")
+    plain_stack = rel_err(plain, stack, finest)
+    if plain_stack == 0:
+        return None  # disjoint: the exactness rule applies, not this one
+    ratio = rel_err(full, stack, finest) / plain_stack
+    if ratio <= 1.5:
+        return None
+    for b in np.arange(0, 1.001, 0.05):
+        x = full + b * (plain - full)
+        if passes(x, finest, stack, frame, plain):
+            return ratio, b, rel_err(x, frame, finest) / rel_err(plain, frame, finest)
+    return ratio, None, None
+
+
+def case_dirs(roots):
+    for d in roots:
         for case in sorted(os.listdir(d)):
             path = os.path.join(d, case)
-            if not os.path.exists(os.path.join(path, "ideal_frame.ply")):
-                continue
-            case_data = load(path)
-            r = interval(case_data)
-            if r is None:
-                print("%-34s the ideals agree" % case)
-                continue
-            print("%-34s a in [%.2f, %.2f]" % (case, r[0], r[1]))
-            conflicting.append(case_data)
-            lo, hi = max(lo, r[0]), min(hi, r[1])
+            if os.path.exists(os.path.join(path, "ideal_frame.ply")):
+                yield case, path
+
+
+def pull_main(binary, roots):
+    for case, path in case_dirs(roots):
+        found = least_pull(binary, path)
+        if found is None:
+            continue
+        ratio, b, share = found
+        print("%-34s full %.2fx sum against the stack; " % (case, ratio) +
+              ("least pull b %.2f, keeping %.2f of sum's frame error" % (b, share)
+               if b is not None else "no pull meets both rules"))
+
+
+def main():
+    if len(sys.argv) > 2 and sys.argv[1] == "--pull":
+        return pull_main(sys.argv[2], sys.argv[3:])
+    lo, hi = 0.0, 1.0
+    conflicting = []
+    for case, path in case_dirs(sys.argv[1:]):
+        case_data = load(path)
+        r = interval(case_data)
+        if r is None:
+            print("%-34s the ideals agree" % case)
+            continue
+        print("%-34s a in [%.2f, %.2f]" % (case, r[0], r[1]))
+        conflicting.append(case_data)
+        lo, hi = max(lo, r[0]), min(hi, r[1])
     print("every case: " + ("a in [%.2f, %.2f]" % (lo, hi) if lo <= hi else
                             "no a meets both rules (the ideals conflict)"))
     print("off the segment, frame + a (stack - frame) + b (sum - frame), meeting both rules on "
