@@ -11,7 +11,10 @@ case has it) by two measures of the coarsest edit at each vertex:
     quaternions (1 when they turn as one, cos(s/2) for turns s apart), what `full`'s frame
     transport trusts a carrier by.
 Each row's share is sqrt(sum of squared errors in the row / support size) / the edit's RMS
-size, so the rows add up in squares to the case's rel_err."""
+size, so the rows add up in squares to the case's rel_err. A last line says how far the
+coarsest edit stretches the faces of the support (largest |singular value - 1| of each face's
+map, median and largest) beside the stretch a shear tilting them by their median turn would
+make (1 / cos - 1): how little a surface shows whether a coarse edit turned or sheared it."""
 import os
 import sys
 
@@ -60,6 +63,21 @@ def turn_measures(base, edited, faces):
     return largest, np.linalg.norm(total, axis=1) / np.maximum(count, 1)
 
 
+def face_stretch(base, edited, faces):
+    """Per face: the largest |singular value - 1| of its map from base to edited."""
+    def metric(p):
+        e1, e2 = p[faces[:, 1]] - p[faces[:, 0]], p[faces[:, 2]] - p[faces[:, 0]]
+        dot = lambda a, b: (a * b).sum(1)  # noqa: E731
+        return np.stack([np.stack([dot(e1, e1), dot(e1, e2)], 1),
+                         np.stack([dot(e2, e1), dot(e2, e2)], 1)], 1)
+    before, after = metric(base), metric(edited)
+    ok = np.abs(np.linalg.det(before)) > 1e-30
+    squares = np.linalg.eigvals(np.linalg.solve(before[ok], after[ok])).real
+    stretch = np.zeros(len(faces))
+    stretch[ok] = np.abs(np.sqrt(np.abs(squares)) - 1).max(1)
+    return stretch
+
+
 def main():
     if len(sys.argv) != 3:
         print(__doc__, file=sys.stderr)
@@ -71,7 +89,8 @@ def main():
     ds = [e - base for e in edits]
     rms = [np.sqrt((np.linalg.norm(d, axis=1) ** 2).mean()) for d in ds]
     finest, coarsest = ds[int(np.argmin(rms))], int(np.argmax(rms))
-    largest, agreement = turn_measures(base, edits[coarsest], read_faces(os.path.join(case, "base.ply")))
+    faces = read_faces(os.path.join(case, "base.ply"))
+    largest, agreement = turn_measures(base, edits[coarsest], faces)
     size = np.linalg.norm(finest, axis=1)
     support = size > 1e-6 * max(1e-12, size.max()) + 1e-9
     scale = np.sqrt((size[support] ** 2).mean())
@@ -92,6 +111,14 @@ def main():
                                                      / support.sum()) / scale)
                            for ideal in ideals for method in results)
         print("%-20s %5d vertices  %s" % (label, m.sum(), shares))
+    inside = support[faces].all(1)
+    stretch = face_stretch(base, edits[coarsest], faces[inside])
+    turn = np.degrees(np.arccos(np.clip((face_normals(base, faces[inside]) *
+                                         face_normals(edits[coarsest], faces[inside])).sum(1), -1, 1)))
+    print("coarsest edit on the support's %d faces: stretch median %.3f, largest %.3f; turn "
+          "median %.1f deg, where a shear would stretch by %.3f" % (
+              inside.sum(), np.median(stretch), stretch.max(), np.median(turn),
+              1 / np.cos(np.radians(np.median(turn))) - 1))
     return 0
 
 
