@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <optional>
 
 namespace csculpt::detail {
 namespace {
@@ -67,13 +68,18 @@ class Transport {
   /// The carrying energies of the chunk's vertices, and each one's carrying levels.
   void chunk_energy(std::size_t begin, std::size_t end, double* energy);
   void finish_weights(std::size_t chunks);
-  Vec3f merged(std::size_t at) const;
+  /// The merged position of the listed vertex `at`; `s` is scratch (its arrays are sized for
+  /// the most users, so it is made once per chunk, not per vertex).
+  Vec3f merged(std::size_t at, VertexState& s) const;
 
  private:
   void plan_levels(std::size_t at, const VertexState& s);
+  bool may_carry(const VertexState& s) const;
+  void load_turns(std::size_t at, VertexState& s) const;
+  void load_displacements(std::size_t at, VertexState& s) const;
+  std::optional<Vec3f> sole_edit(std::size_t at) const;
   std::uint32_t group_coincident();
   void share_rotations(std::uint32_t groups);
-  void load(std::size_t at, VertexState& s) const;
   Quat rotation(std::size_t at, std::size_t i) const;
   Vec3d face_cross(std::uint32_t f) const;
   Vec3d base_normal(std::uint32_t v) const;
@@ -341,7 +347,8 @@ double Transport::agreement(std::size_t at, std::size_t i) const {
   return group != kNoSeam ? scratch_.seam_agreement[group * n_ + i] : faces_agree(vertices_[at], i);
 }
 
-void Transport::load(std::size_t at, VertexState& s) const {
+/// The displacements at the listed vertex `at` (no rotations).
+void Transport::load_displacements(std::size_t at, VertexState& s) const {
   const std::uint32_t v = vertices_[at];
   const Vec3f& b = base_[v];
   for (std::size_t i = 0; i < n_; ++i) {
@@ -354,16 +361,41 @@ void Transport::load(std::size_t at, VertexState& s) const {
       s.d[i] = {};
     }
     s.size[i] = std::sqrt(norm2(s.d[i]));
+  }
+}
+
+/// Which diffs move the listed vertex `at` and their rotations there (no displacements).
+void Transport::load_turns(std::size_t at, VertexState& s) const {
+  const std::uint32_t v = vertices_[at];
+  for (std::size_t i = 0; i < n_; ++i) {
+    s.moves[i] = has(users_[i].changed, v);
     s.rotation[i] = rotation(at, i);
     s.turns[i] = !is_identity(s.rotation[i]);
   }
+}
+
+/// Whether some diff turns the surface at the vertex under another diff's displacement:
+/// elsewhere nothing is carried (every T_j is the identity), so the vertex needs no energy,
+/// no carrying level and no frame.
+bool Transport::may_carry(const VertexState& s) const {
+  std::size_t movers = 0, turners = 0, both = 0;
+  for (std::size_t i = 0; i < n_; ++i) {
+    movers += s.moves[i];
+    turners += s.turns[i];
+    both += s.moves[i] && s.turns[i];
+  }
+  // some i != j with turns[i] and moves[j]: unless the only turner is the only mover
+  return turners > 0 && movers > 0 && !(turners == 1 && movers == 1 && both == 1);
 }
 
 void Transport::chunk_energy(std::size_t begin, std::size_t end, double* energy) {
   std::fill(energy, energy + n_ * n_, 0.0);
   VertexState s;
   for (std::size_t at = begin; at < end; ++at) {
-    load(at, s);
+    load_turns(at, s);
+    scratch_.carried_here[at] = may_carry(s);
+    if (!scratch_.carried_here[at]) continue;  // its energy terms are zero, its levels unread
+    load_displacements(at, s);
     plan_levels(at, s);
     for (std::size_t i = 0; i < n_; ++i) {
       if (!s.turns[i]) continue;
@@ -415,9 +447,32 @@ double Transport::same(const VertexState& s, std::size_t i, std::size_t j) const
   return same_once_ ? sameness(s, i, j) : 0.0;
 }
 
-Vec3f Transport::merged(std::size_t at) const {
-  VertexState s;
-  load(at, s);
+/// The position of the listed vertex `at` when one diff alone moves it: b + (e - b) in double,
+/// bit for bit what the formula gives a lone displacement. None when several move it (or none).
+std::optional<Vec3f> Transport::sole_edit(std::size_t at) const {
+  const std::uint32_t v = vertices_[at];
+  std::size_t mover = n_;
+  for (std::size_t i = 0; i < n_; ++i) {
+    if (!has(users_[i].changed, v)) continue;
+    if (mover != n_) return std::nullopt;
+    mover = i;
+  }
+  if (mover == n_) return std::nullopt;
+  const TransportInput& u = users_[mover];
+  const float* e = u.edited + 3 * std::size_t{u.slot[v]};
+  const Vec3d b = widen(base_[v]);
+  return narrow(add(b, sub(widen(Vec3f{e[0], e[1], e[2]}), b)));
+}
+
+Vec3f Transport::merged(std::size_t at, VertexState& s) const {
+  if (scratch_.carried_here[at] != 0) {
+    load_turns(at, s);
+    load_displacements(at, s);
+  } else {  // no carrier: the displacements add (identical intents counted once)
+    if (const std::optional<Vec3f> sole = sole_edit(at)) return *sole;
+    load_displacements(at, s);
+    std::fill_n(s.turns.begin(), n_, false);
+  }
   const std::uint32_t v = vertices_[at];
   const Vec3f& b = base_[v];
   Vec3d sum{}, n{};
@@ -430,7 +485,7 @@ Vec3f Transport::merged(std::size_t at) const {
     for (std::size_t k = 0; k < n_; ++k)
       if (k != j && s.moves[k]) count += same(s, j, k);
     Vec3d carried = s.d[j];
-    const double level = carrying_level(s.size[j], scratch_.edge[at]);
+    double level = -1;  // read once some diff carries d_j here
     for (std::size_t i = n_; i-- > 0;) {
       if (i == j || !s.turns[i]) continue;
       double g = (1.0 - same(s, i, j)) * scratch_.weight[i * n_ + j];
@@ -439,6 +494,7 @@ Vec3f Transport::merged(std::size_t at) const {
       g *= agrees[i];
       if (!(g > 0)) continue;
       if (!have_normal) n = normal(at), have_normal = true;
+      if (level < 0) level = carrying_level(s.size[j], scratch_.edge[at]);
       const Quat frame = carrier(at, i, level);
       carried = add(carried, scale(rotation_change(swing(frame, n), carried), g));
     }
@@ -463,6 +519,7 @@ void transport_positions(
   const std::size_t chunks = std::max<std::size_t>(1, (vertices.size() + grain - 1) / grain);
   scratch.chunk_energy.resize(chunks * n * n);
   scratch.edge.resize(vertices.size());
+  scratch.carried_here.resize(vertices.size());
   if (scratch.reads_level.size() < base.size()) scratch.reads_level.resize(base.size(), 0);
   std::fill(scratch.chunk_energy.begin(), scratch.chunk_energy.begin() + n * n, 0.0);
   pool.for_chunks(vertices.size(), grain, [&](std::size_t begin, std::size_t end) {
@@ -474,7 +531,8 @@ void transport_positions(
     for (std::size_t j = 0; j < n; ++j) carries[i] = carries[i] || scratch.weight[i * n + j] > 0;
   carriers(std::span<const bool>(carries.data(), n), scratch.reads_level);
   pool.for_chunks(vertices.size(), grain, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t at = begin; at < end; ++at) moved[at] = t.merged(at);
+    VertexState s;
+    for (std::size_t at = begin; at < end; ++at) moved[at] = t.merged(at, s);
   });
   for (const std::uint32_t v : vertices) scratch.reads_level[v] = 0;
 }

@@ -88,6 +88,8 @@ struct TransportScratch {
   std::vector<Vec3d> seam_normal;      ///< per seam group: the sum of its members' normals
   std::vector<double> seam_agreement;  ///< per seam group and diff: the least agreement
   std::vector<double> edge;            ///< per listed vertex: its mean edge length
+  /// Per listed vertex: 1 where some diff turns the surface under another's displacement.
+  std::vector<std::uint8_t> carried_here;
   /// Per vertex: bit l set when a displacement there reads carrying level l (all clear
   /// between merges).
   std::vector<std::uint8_t> reads_level;
