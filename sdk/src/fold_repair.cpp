@@ -72,6 +72,7 @@ struct Repair {
   std::span<Vec3f> moved;
   FoldRepairScratch& s;
   std::span<const double> carrying;
+  std::span<const std::uint8_t> sole;
 
   Vec3d position(std::uint32_t v) const {
     const std::uint32_t i = s.slot[v];
@@ -160,10 +161,27 @@ struct Repair {
   /// Appends to `out` the new folds among the faces around vertex `i` of the list that `in`
   /// (a predicate on vertices) holds for, each face tested from its lowest such vertex.
   template <class In>
-  void collect_folds_at(std::uint32_t i, In&& in, std::vector<std::uint32_t>& out) const {
+  void collect_folds_at(std::uint32_t i, In&& in, std::vector<std::uint32_t>& out,
+                        bool skip_sole = false) const {
     const std::uint32_t v = vertices[i];
-    for (std::uint32_t f : topology.vertex_faces.row(v))
-      if (lowest_listed(topology.triangles[f], v, in) && is_new_fold(f)) out.push_back(f);
+    for (std::uint32_t f : topology.vertex_faces.row(v)) {
+      const Triangle& t = topology.triangles[f];
+      if (lowest_listed(t, v, in) && !(skip_sole && one_edits_face(t)) && is_new_fold(f))
+        out.push_back(f);
+    }
+  }
+
+  /// Whether every vertex of `t` holds one diff's edited position (`sole`) or the base (moved
+  /// by none): then `t` is that diff's face, folded by it if folded at all.
+  bool one_edits_face(const Triangle& t) const {
+    std::uint8_t which = kNoSoleEdit;
+    for (std::uint32_t u : t) {
+      const std::uint32_t i = s.slot[u];
+      if (i == kNone) continue;
+      if (sole[i] == kNoSoleEdit || (which != kNoSoleEdit && sole[i] != which)) return false;
+      which = sole[i];
+    }
+    return true;
   }
 
   /// The new folds around every moved vertex, in chunks over `pool` (the one pass every merge
@@ -176,7 +194,7 @@ struct Repair {
       std::vector<std::uint32_t>& out = s.chunk_folds[begin / grain];
       out.clear();
       for (std::size_t i = begin; i < end; ++i)
-        collect_folds_at(static_cast<std::uint32_t>(i), moved_vertex, out);
+        collect_folds_at(static_cast<std::uint32_t>(i), moved_vertex, out, !sole.empty());
     });
     s.folds.clear();
     for (std::size_t c = 0; c < chunks; ++c)
@@ -424,11 +442,12 @@ std::uint32_t repair_new_folds(const Topology& topology, std::span<const Vec3f> 
                                std::span<const Diff* const> diffs,
                                std::span<const std::uint32_t> seam_of, std::span<Vec3f> moved,
                                FoldRepairScratch& scratch, WorkerPool& pool, std::size_t grain,
-                               std::span<const double> carrying) {
+                               std::span<const double> carrying,
+                               std::span<const std::uint8_t> sole) {
   if (scratch.slot.size() != topology.vertex_count)
     scratch.slot.assign(topology.vertex_count, kNone);
   for (std::uint32_t i = 0; i < vertices.size(); ++i) scratch.slot[vertices[i]] = i;
-  Repair r{topology, base, vertices, diffs, seam_of, moved, scratch, carrying};
+  Repair r{topology, base, vertices, diffs, seam_of, moved, scratch, carrying, sole};
   r.collect_all_folds(pool, grain);
   const auto found = static_cast<std::uint32_t>(scratch.folds.size());
   if (found > 0) {

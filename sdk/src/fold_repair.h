@@ -30,6 +30,9 @@
 
 namespace csculpt::detail {
 
+/// In repair_new_folds' `sole`: a vertex whose merged position is no one diff's edit.
+constexpr std::uint8_t kNoSoleEdit = 0xff;
+
 /// Scratch reused across merges (no allocation once warm). Indices are into the moved list.
 struct FoldRepairScratch {
   std::vector<std::uint32_t> slot;   ///< per vertex: index in the moved list; kNone between calls
@@ -56,12 +59,16 @@ struct FoldRepairScratch {
 /// the number of new folds found before the repair. The search for them runs over `pool` in
 /// chunks of `grain`; the repair itself, rare and local, on the calling thread. `carrying`
 /// (empty, or diffs x diffs: how much diff i's frame carried diff j, the transport's w_ij)
-/// lets the smoothing keep a coarse edit that carried the details folding on it.
+/// lets the smoothing keep a coarse edit that carried the details folding on it. `sole` (empty,
+/// or one per vertex of the list): the diff whose edited position `moved` holds exactly, or
+/// kNoSoleEdit; the search skips the faces whose vertices all hold one diff's edit or the
+/// base, which are that diff's faces (most of a merge where few edits overlap).
 std::uint32_t repair_new_folds(const Topology& topology, std::span<const Vec3f> base,
                                std::span<const std::uint32_t> vertices,
                                std::span<const Diff* const> diffs,
                                std::span<const std::uint32_t> seam_of, std::span<Vec3f> moved,
                                FoldRepairScratch& scratch, WorkerPool& pool, std::size_t grain,
-                               std::span<const double> carrying = {});
+                               std::span<const double> carrying = {},
+                               std::span<const std::uint8_t> sole = {});
 
 }  // namespace csculpt::detail

@@ -1,10 +1,11 @@
 #include "frame_transport.h"
 
+#include "fold_repair.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
-#include <optional>
 
 namespace csculpt::detail {
 namespace {
@@ -77,7 +78,7 @@ class Transport {
   bool may_carry(const VertexState& s) const;
   void load_turns(std::size_t at, VertexState& s) const;
   void load_displacements(std::size_t at, VertexState& s) const;
-  std::optional<Vec3f> sole_edit(std::size_t at) const;
+  std::size_t sole_mover(std::size_t at) const;
   std::uint32_t group_coincident();
   void share_rotations(std::uint32_t groups);
   Quat rotation(std::size_t at, std::size_t i) const;
@@ -447,29 +448,31 @@ double Transport::same(const VertexState& s, std::size_t i, std::size_t j) const
   return same_once_ ? sameness(s, i, j) : 0.0;
 }
 
-/// The position of the listed vertex `at` when one diff alone moves it: b + (e - b) in double,
-/// bit for bit what the formula gives a lone displacement. None when several move it (or none).
-std::optional<Vec3f> Transport::sole_edit(std::size_t at) const {
+/// The diff that alone moves the listed vertex `at`; n_ when several do.
+std::size_t Transport::sole_mover(std::size_t at) const {
   const std::uint32_t v = vertices_[at];
   std::size_t mover = n_;
   for (std::size_t i = 0; i < n_; ++i) {
     if (!has(users_[i].changed, v)) continue;
-    if (mover != n_) return std::nullopt;
+    if (mover != n_) return n_;
     mover = i;
   }
-  if (mover == n_) return std::nullopt;
-  const TransportInput& u = users_[mover];
-  const float* e = u.edited + 3 * std::size_t{u.slot[v]};
-  const Vec3d b = widen(base_[v]);
-  return narrow(add(b, sub(widen(Vec3f{e[0], e[1], e[2]}), b)));
+  return mover;
 }
 
 Vec3f Transport::merged(std::size_t at, VertexState& s) const {
+  scratch_.sole[at] = kNoSoleEdit;
   if (scratch_.carried_here[at] != 0) {
     load_turns(at, s);
     load_displacements(at, s);
+  } else if (const std::size_t i = sole_mover(at); i < n_) {
+    // b + (e - b) in double: bit for bit what the formula below gives a lone displacement
+    const Vec3d e = edited_position(i, vertices_[at]);
+    const Vec3d b = widen(base_[vertices_[at]]);
+    const Vec3f result = narrow(add(b, sub(e, b)));
+    if (result == narrow(e)) scratch_.sole[at] = static_cast<std::uint8_t>(i);
+    return result;
   } else {  // no carrier: the displacements add (identical intents counted once)
-    if (const std::optional<Vec3f> sole = sole_edit(at)) return *sole;
     load_displacements(at, s);
     std::fill_n(s.turns.begin(), n_, false);
   }
@@ -520,6 +523,7 @@ void transport_positions(
   scratch.chunk_energy.resize(chunks * n * n);
   scratch.edge.resize(vertices.size());
   scratch.carried_here.resize(vertices.size());
+  scratch.sole.resize(vertices.size());
   if (scratch.reads_level.size() < base.size()) scratch.reads_level.resize(base.size(), 0);
   std::fill(scratch.chunk_energy.begin(), scratch.chunk_energy.begin() + n * n, 0.0);
   pool.for_chunks(vertices.size(), grain, [&](std::size_t begin, std::size_t end) {

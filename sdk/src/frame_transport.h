@@ -90,6 +90,10 @@ struct TransportScratch {
   std::vector<double> edge;            ///< per listed vertex: its mean edge length
   /// Per listed vertex: 1 where some diff turns the surface under another's displacement.
   std::vector<std::uint8_t> carried_here;
+  /// Per listed vertex: the diff whose edited position the merge gave it exactly, or
+  /// kNoSoleEdit (fold_repair.h: a face all of whose vertices hold one diff's edit or the base
+  /// is that diff's face, and cannot be a new fold).
+  std::vector<std::uint8_t> sole;
   /// Per vertex: bit l set when a displacement there reads carrying level l (all clear
   /// between merges).
   std::vector<std::uint8_t> reads_level;

@@ -717,6 +717,15 @@ std::vector<std::size_t> canonical_order(std::span<const Diff* const> diffs,
 // ---------------------------------------------------------------------------------------
 // The Merger: its workspace, validation, and the pass (Merger::Pass) that runs the steps.
 
+/// One carrying task's scratch (Merger::Pass::carrying_rotations), per level between the
+/// vertices and the averaged level: the interpolated rotations, and the nodes the readers
+/// below need, each listed once (marked; the marks are cleared after the task).
+struct CarryingScratch {
+  std::vector<std::vector<Quat>> rotation;
+  std::vector<std::vector<std::uint32_t>> need;
+  std::vector<std::vector<std::uint8_t>> marked;
+};
+
 struct Merger::Workspace {
   std::vector<SparsePyramid<DualQuat>> dq_users;
   SparsePyramid<DualQuat> dq_merged;
@@ -738,7 +747,7 @@ struct Merger::Workspace {
   /// Per diff and carrying level (u * kCarryLevels + l): its rotations averaged over level l,
   /// per vertex; and per such task, the levels between as scratch.
   std::vector<std::vector<Quat>> carrying;
-  std::vector<std::vector<std::vector<Quat>>> carrying_scratch;
+  std::vector<CarryingScratch> carrying_scratch;
   detail::FoldRepairScratch fold_repair;
   detail::WorkerPool pool;
 };
@@ -877,7 +886,10 @@ struct Merger::Pass {
   void transport_positions();
   void carrying_fields(std::span<const bool> carries, std::span<const std::uint8_t> reads_level);
   void carrying_rotations(std::size_t u, std::size_t top, std::span<const std::uint8_t> reads_level,
-                          std::vector<std::vector<Quat>>& scratch);
+                          CarryingScratch& scratch);
+  void list_carrying_needs(const SparsePyramid<DualQuat>& pyramid, std::size_t top,
+                           std::span<const std::uint8_t> reads_level,
+                           CarryingScratch& scratch) const;
   void repair_folds(std::span<const std::uint32_t> changed, std::span<Vec3f> moved);
   void count_kept(std::size_t begin, std::size_t end);
   void list_moved_positions(AttributeDiff& out, std::size_t chunks);
@@ -1133,22 +1145,17 @@ void Merger::Pass::carrying_fields(std::span<const bool> carries,
 /// offsets from the identity, normalised (absent parents are the identity).
 void Merger::Pass::carrying_rotations(std::size_t u, std::size_t top,
                                       std::span<const std::uint8_t> reads_level,
-                                      std::vector<std::vector<Quat>>& scratch) {
-  const std::uint32_t reads = top + 1 < level_count ? 1u << top : ~0u << top;
+                                      CarryingScratch& scratch) {
   const SparsePyramid<DualQuat>& pyramid = ws.dq_users[u];
   std::vector<Quat>& out = ws.carrying[u * detail::kCarryLevels + top];
   if (out.size() < vertex_count) out.resize(vertex_count);
-  if (scratch.size() < top) scratch.resize(top);
-  for (std::size_t l = 1; l < top; ++l)
-    if (scratch[l].size() < hierarchy.levels()[l].node_count)
-      scratch[l].resize(hierarchy.levels()[l].node_count);
+  list_carrying_needs(pyramid, top, reads_level, scratch);
   for (std::size_t l = top; l-- > 0;) {
     const ParentLinks::Level fine = links.level(l);
     const LevelView<DualQuat> coarse = LevelView<DualQuat>::of(pyramid.levels[l + 1]);
-    const Quat* above = l + 1 < top ? scratch[l + 1].data() : nullptr;
-    Quat* here = l == 0 ? out.data() : scratch[l].data();
-    for (const std::uint32_t c : pyramid.levels[l].list) {
-      if (l == 0 && (reads_level[c] & reads) == 0) continue;
+    const Quat* above = l + 1 < top ? scratch.rotation[l + 1].data() : nullptr;
+    Quat* here = l == 0 ? out.data() : scratch.rotation[l].data();
+    for (const std::uint32_t c : scratch.need[l]) {
       const ParentLinks::Level::Row row = fine.row(c);
       float w = 0, x = 0, y = 0, z = 0, total = 0;
       for (std::uint32_t k = 0; k < row.count; ++k) {
@@ -1165,6 +1172,45 @@ void Merger::Pass::carrying_rotations(std::size_t u, std::size_t top,
       here[c] = length > 0 ? (1 / length) * q : Quat{};
     }
   }
+  for (std::size_t l = 1; l < top; ++l)
+    for (const std::uint32_t c : scratch.need[l]) scratch.marked[l][c] = 0;
+}
+
+/// The nodes carrying_rotations computes for level `top`: at level 0 the vertices that read
+/// it, at each level between the parents of the level below's (present in the pyramid). A
+/// node's value depends only on its parents', so the readers' values are those of the whole
+/// levels, at a fraction of the work where few vertices are carried.
+void Merger::Pass::list_carrying_needs(const SparsePyramid<DualQuat>& pyramid, std::size_t top,
+                                       std::span<const std::uint8_t> reads_level,
+                                       CarryingScratch& scratch) const {
+  const std::uint32_t reads = top + 1 < level_count ? 1u << top : ~0u << top;
+  if (scratch.need.size() < top) {
+    scratch.rotation.resize(top);
+    scratch.need.resize(top);
+    scratch.marked.resize(top);
+  }
+  for (std::size_t l = 1; l < top; ++l) {
+    const std::size_t nodes = hierarchy.levels()[l].node_count;
+    if (scratch.rotation[l].size() < nodes) scratch.rotation[l].resize(nodes);
+    if (scratch.marked[l].size() < nodes) scratch.marked[l].resize(nodes, 0);
+  }
+  scratch.need[0].clear();
+  for (const std::uint32_t c : pyramid.levels[0].list)
+    if ((reads_level[c] & reads) != 0) scratch.need[0].push_back(c);
+  for (std::size_t l = 0; l + 1 < top; ++l) {
+    const ParentLinks::Level fine = links.level(l);
+    const LevelView<DualQuat> coarse = LevelView<DualQuat>::of(pyramid.levels[l + 1]);
+    std::vector<std::uint32_t>& next = scratch.need[l + 1];
+    std::vector<std::uint8_t>& marked = scratch.marked[l + 1];
+    next.clear();
+    for (const std::uint32_t c : scratch.need[l]) {
+      const ParentLinks::Level::Row row = fine.row(c);
+      for (std::uint32_t k = 0; k < row.count; ++k) {
+        const std::uint32_t p = row.parents[k];
+        if (coarse.has(p) && marked[p] == 0) marked[p] = 1, next.push_back(p);
+      }
+    }
+  }
 }
 
 void Merger::Pass::repair_folds(std::span<const std::uint32_t> changed, std::span<Vec3f> moved) {
@@ -1173,7 +1219,8 @@ void Merger::Pass::repair_folds(std::span<const std::uint32_t> changed, std::spa
   for (std::uint32_t u = 0; u < users; ++u) ordered[u] = diffs[order[u]];
   timings.new_folds_repaired += detail::repair_new_folds(
       hierarchy.topology(), base.positions, changed, std::span(ordered.data(), users),
-      ws.transport.seam_of, moved, ws.fold_repair, ws.pool, kBlendGrain, ws.transport.weight);
+      ws.transport.seam_of, moved, ws.fold_repair, ws.pool, kBlendGrain, ws.transport.weight,
+      ws.transport.sole);
   timings.fold_repair_ms += ms_since(t0);
 }
 
