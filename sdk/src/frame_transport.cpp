@@ -79,6 +79,8 @@ class Transport {
   void load_turns(std::size_t at, VertexState& s) const;
   void load_displacements(std::size_t at, VertexState& s) const;
   std::size_t sole_mover(std::size_t at) const;
+  Vec3f lone_edit(std::size_t at, std::size_t i) const;
+  Vec3f transported(std::size_t at, const VertexState& s) const;
   std::uint32_t group_coincident();
   void share_rotations(std::uint32_t groups);
   Quat rotation(std::size_t at, std::size_t i) const;
@@ -466,20 +468,28 @@ Vec3f Transport::merged(std::size_t at, VertexState& s) const {
     load_turns(at, s);
     load_displacements(at, s);
   } else if (const std::size_t i = sole_mover(at); i < n_) {
-    // b + (e - b) in double: bit for bit what the formula below gives a lone displacement
-    const Vec3d e = edited_position(i, vertices_[at]);
-    const Vec3d b = widen(base_[vertices_[at]]);
-    const Vec3f result = narrow(add(b, sub(e, b)));
-    if (result == narrow(e)) scratch_.sole[at] = static_cast<std::uint8_t>(i);
-    return result;
+    return lone_edit(at, i);
   } else {  // no carrier: the displacements add (identical intents counted once)
     load_displacements(at, s);
     std::fill_n(s.turns.begin(), n_, false);
   }
-  const std::uint32_t v = vertices_[at];
-  const Vec3f& b = base_[v];
+  return transported(at, s);
+}
+
+/// Diff i's edit of the listed vertex `at`, which it alone moves: b + (e - b) in double, bit
+/// for bit what transported() gives a lone displacement. Notes it in `sole` when exact.
+Vec3f Transport::lone_edit(std::size_t at, std::size_t i) const {
+  const Vec3d e = edited_position(i, vertices_[at]);
+  const Vec3d b = widen(base_[vertices_[at]]);
+  const Vec3f result = narrow(add(b, sub(e, b)));
+  if (result == narrow(e)) scratch_.sole[at] = static_cast<std::uint8_t>(i);
+  return result;
+}
+
+/// The formula (frame_transport.h) at the listed vertex `at`, its state loaded in `s`.
+Vec3f Transport::transported(std::size_t at, const VertexState& s) const {
   Vec3d sum{}, n{};
-  bool have_normal = false;  // computed only where one edit carries another
+  bool have_normal = false;              // computed only where one edit carries another
   std::array<double, kMaxUsers> agrees;  // per carrier, once it carries anything here
   std::fill_n(agrees.begin(), n_, -1.0);
   for (std::size_t j = 0; j < n_; ++j) {
@@ -503,7 +513,7 @@ Vec3f Transport::merged(std::size_t at, VertexState& s) const {
     }
     sum = add(sum, count == 1 ? carried : scale(carried, 1.0 / count));
   }
-  return narrow(add(widen(b), sum));
+  return narrow(add(widen(base_[vertices_[at]]), sum));
 }
 
 }  // namespace

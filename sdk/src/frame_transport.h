@@ -8,7 +8,9 @@
 //
 // - T_j transports a displacement into the frame the other edits give the surface there: a
 //   detail on a bend turns with the bend and keeps its height, on a cast it follows the new
-//   normals. Where no other diff rotates v, T_j = I and the edit comes back exactly.
+//   normals. Where no other diff rotates v, T_j = I and the edit comes back exactly; such
+//   vertices (most of a merge where few edits overlap) skip the energy, the carrying level
+//   and the frame altogether.
 // - R_i is read at the scale of the displacement it carries: averaged over the hierarchy
 //   (level l spans about 2^l edges) across |d_j| / h edges around v, h the local edge length,
 //   interpolated between levels. A displacement of several edges rides the turn of the
