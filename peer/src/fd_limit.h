@@ -1,5 +1,8 @@
-// The process's open-file limit, raised for a peer that accepts connections from anyone.
+// The process's open-file limit: raised for a peer that accepts connections from anyone, and
+// checked before a session opens its sockets.
 #pragma once
+
+#include <cstddef>
 
 namespace csculpt::peer {
 
@@ -9,5 +12,15 @@ namespace csculpt::peer {
 /// usual soft limit of 1024 would let a thousand of them keep members out. Failure is not an
 /// error: the peer then runs with the limit it was given.
 void raise_fd_limit();
+
+/// Descriptors a session needs free when it starts: libzmq's threads and mailboxes, the
+/// session's sockets, and two connections per member for a session of a dozen.
+inline constexpr std::size_t kSessionDescriptors = 64;
+
+/// Throws IoError saying what to do when fewer than `needed` descriptors are free under the
+/// soft open-file limit: libzmq aborts the process when it cannot open its own (at a limit of
+/// 8), and a listener that cannot accept refuses every joiner without a word (at 16). Does
+/// nothing where the open descriptors cannot be counted (no /proc).
+void require_free_descriptors(std::size_t needed);
 
 }  // namespace csculpt::peer

@@ -125,6 +125,7 @@ Transport::Transport(const Invite& invite, PeerId self, const std::string& bind,
                      std::size_t max_message_bytes)
     : self_(self), invite_(invite), max_message_bytes_(max_message_bytes) {
   raise_fd_limit();
+  require_free_descriptors(kSessionDescriptors);
   server_public_ = curve_public(invite.server_secret);
   client_public_ = curve_public(invite.client_secret);
   if (::pipe(wake_pipe_) != 0) throw IoError("creating the network thread's wake-up pipe failed");

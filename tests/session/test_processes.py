@@ -1,14 +1,16 @@
 #!/usr/bin/env python3
 """Sessions of 3-4 real `csculpt peer` processes on loopback: join and merge with convergence
 by hash, late join, a clean leave, and SIGKILL of the merger (re-election within 2 s, no lost
-edit)."""
+edit). And a peer under an open-file limit too low for a session refuses to start, saying so."""
 
 import os
+import resource
+import subprocess
 import sys
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from sessionlib import Peer, finish, report, wait_converged  # noqa: E402
+from sessionlib import CLI, Peer, finish, report, wait_converged  # noqa: E402
 
 REELECTION_LIMIT_S = 2.0
 
@@ -144,6 +146,19 @@ class Processes(unittest.TestCase):
         report("sigkill of the merger", reelection_s=[round(d, 3) for d in delays],
                version_at_kill=version_at_kill, final_version=result["version"],
                converged_after_last_edit_s=round(seconds, 3), new_merger_merges=summaries[0]["merges"])
+
+    def test_an_open_file_limit_too_low_for_a_session_is_refused_with_a_message(self):
+        # At 8 libzmq aborted the process (it could not open its own descriptors); at 16 the
+        # session started but could accept no joiner, and said nothing.
+        for limit in (8, 16):
+            def lower(limit=limit):
+                resource.setrlimit(resource.RLIMIT_NOFILE, (limit, limit))
+            r = subprocess.run([CLI, "peer", "--faces", "2000", "--seconds", "0", "--linger", "0"],
+                               stdin=subprocess.DEVNULL, capture_output=True, text=True,
+                               timeout=30, preexec_fn=lower)
+            self.assertEqual(r.returncode, 1, f"limit {limit}: exit {r.returncode}: {r.stderr}")
+            self.assertIn(f"the open-file limit is {limit}", r.stderr)
+            self.assertIn("ulimit -n", r.stderr)
 
 
 if __name__ == "__main__":
