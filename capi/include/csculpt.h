@@ -468,7 +468,9 @@ typedef struct csc_session_options {
   { sizeof(csc_session_options), NULL, NULL, 0, 10, 200, 600, 1200, 1e-5, 1e-4, 30000, NULL }
 
 /** Starts a session on `mesh` (copied; it becomes version 0). `options` may be NULL. Fails with
- *  CSC_ERROR_IO if the endpoint cannot be bound. */
+ *  CSC_ERROR_IO if the endpoint cannot be bound, or when fewer than 64 file descriptors are
+ *  free under the process's open-file limit (csc_last_error says how to raise it); joining
+ *  and resuming check the same. */
 CSC_API csc_status csc_session_create(csc_session** out, const csc_mesh* mesh,
                                       const csc_session_options* options);
 
