@@ -161,19 +161,18 @@ struct Repair {
   /// Appends to `out` the new folds among the faces around vertex `i` of the list that `in`
   /// (a predicate on vertices) holds for, each face tested from its lowest such vertex.
   template <class In>
-  void collect_folds_at(std::uint32_t i, In&& in, std::vector<std::uint32_t>& out,
-                        bool skip_sole = false) const {
+  void collect_folds_at(std::uint32_t i, In&& in, std::vector<std::uint32_t>& out) const {
     const std::uint32_t v = vertices[i];
     for (std::uint32_t f : topology.vertex_faces.row(v)) {
       const Triangle& t = topology.triangles[f];
-      if (lowest_listed(t, v, in) && !(skip_sole && one_edits_face(t)) && is_new_fold(f))
-        out.push_back(f);
+      if (lowest_listed(t, v, in) && !one_edits_face(t) && is_new_fold(f)) out.push_back(f);
     }
   }
 
   /// Whether every vertex of `t` holds one diff's edited position (`sole`) or the base (moved
   /// by none): then `t` is that diff's face, folded by it if folded at all.
   bool one_edits_face(const Triangle& t) const {
+    if (sole.empty()) return false;
     std::uint8_t which = kNoSoleEdit;
     for (std::uint32_t u : t) {
       const std::uint32_t i = s.slot[u];
@@ -194,7 +193,7 @@ struct Repair {
       std::vector<std::uint32_t>& out = s.chunk_folds[begin / grain];
       out.clear();
       for (std::size_t i = begin; i < end; ++i)
-        collect_folds_at(static_cast<std::uint32_t>(i), moved_vertex, out, !sole.empty());
+        collect_folds_at(static_cast<std::uint32_t>(i), moved_vertex, out);
     });
     s.folds.clear();
     for (std::size_t c = 0; c < chunks; ++c)
@@ -426,6 +425,7 @@ struct Repair {
   }
 
   void begin_slow_path() {
+    sole = {};  // the repair moves vertices off the edits they held
     const std::size_t n = vertices.size();
     s.seed.assign(n, 0);
     s.ring.assign(n, kNone);

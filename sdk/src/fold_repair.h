@@ -61,7 +61,7 @@ struct FoldRepairScratch {
 /// (empty, or diffs x diffs: how much diff i's frame carried diff j, the transport's w_ij)
 /// lets the smoothing keep a coarse edit that carried the details folding on it. `sole` (empty,
 /// or one per vertex of the list): the diff whose edited position `moved` holds exactly, or
-/// kNoSoleEdit; the search skips the faces whose vertices all hold one diff's edit or the
+/// kNoSoleEdit; the first search skips the faces whose vertices all hold one diff's edit or the
 /// base, which are that diff's faces (most of a merge where few edits overlap).
 std::uint32_t repair_new_folds(const Topology& topology, std::span<const Vec3f> base,
                                std::span<const std::uint32_t> vertices,

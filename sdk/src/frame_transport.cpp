@@ -1,11 +1,11 @@
 #include "frame_transport.h"
 
-#include "fold_repair.h"
-
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
+
+#include "fold_repair.h"
 
 namespace csculpt::detail {
 namespace {

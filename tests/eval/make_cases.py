@@ -285,11 +285,6 @@ def held_object(kind):
         o = imported(lambda: None, None); welded(o); normalised(o)
         s = o.modifiers.new("s", 'SUBSURF'); s.levels = 3; s.subdivision_type = 'SIMPLE'
         bpy.ops.object.modifier_apply(modifier="s")  # flat boxes keep their shape, get vertices
-    elif kind == "huesitos":  # huesitos.fbx: a figure of bones, each a separate part
-        bpy.ops.import_scene.fbx(filepath=M + "FBX/huesitos.fbx")
-        for x in list(bpy.context.scene.objects):
-            if x.type != 'MESH': bpy.data.objects.remove(x)
-        o = imported(lambda: None, None); o.modifiers.clear(); welded(o); normalised(o); subdivided(o, 1)
     else:
         raise ValueError(kind)
     bpy.context.view_layer.objects.active = o; o.select_set(True)
@@ -498,12 +493,12 @@ def lattice(obj, moves):
     hi = mathutils.Vector([max(v[i] for v in vs) for i in range(3)])
     lat = bpy.data.lattices.new("lattice")
     lat.points_u = lat.points_v = lat.points_w = 3
-    lo_ = bpy.data.objects.new("lattice", lat); bpy.context.scene.collection.objects.link(lo_)
-    lo_.location = (lo + hi) / 2; lo_.scale = (hi - lo) * 1.1
+    cage = bpy.data.objects.new("lattice", lat); bpy.context.scene.collection.objects.link(cage)
+    cage.location = (lo + hi) / 2; cage.scale = (hi - lo) * 1.1
     for (i, j, k), off in moves.items():
-        pt = lat.points[i + 3 * (j + 3 * k)]
-        pt.co_deform = pt.co_deform + mathutils.Vector([off[c] / lo_.scale[c] for c in range(3)])
-    m = obj.modifiers.new("lattice", 'LATTICE'); m.object = lo_
+        pt = lat.points[i + 3 * (j + 3 * k)]  # in the cage's unit cube: offsets over its scale
+        pt.co_deform = pt.co_deform + mathutils.Vector([off[c] / cage.scale[c] for c in range(3)])
+    m = obj.modifiers.new("lattice", 'LATTICE'); m.object = cage
     return m
 
 def near(o, p):

@@ -148,8 +148,8 @@ class Processes(unittest.TestCase):
                converged_after_last_edit_s=round(seconds, 3), new_merger_merges=summaries[0]["merges"])
 
     def test_an_open_file_limit_too_low_for_a_session_is_refused_with_a_message(self):
-        # At 8 libzmq aborted the process (it could not open its own descriptors); at 16 the
-        # session started but could accept no joiner, and said nothing.
+        # At 8 libzmq cannot open its own descriptors (it aborts the process); at 16 the
+        # listener could accept no joiner, without a word. Both must be refused up front.
         for limit in (8, 16):
             def lower(limit=limit):
                 resource.setrlimit(resource.RLIMIT_NOFILE, (limit, limit))
