@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Can any merge meet both ideals' rules at once? An oracle check, no merge involved.
 
-usage: ideal_conflict.py [--pull CSCULPT_BIN] CASES_DIR [CASES_DIR ...]
+usage: ideal_conflict.py [--pull CSCULPT_BIN | --alpha] CASES_DIR [CASES_DIR ...]
 
 The rules ask, where a detail and a coarse edit meet: against ideal_frame.ply below "sum",
 and against ideal.ply within 1.5x "sum". Where the two ideals disagree (tapers, casts, grab
@@ -17,7 +17,19 @@ deformation is not rigid (docs/merge-quality.md, "Limits").
 With --pull, it prints instead, for every case where `full` (run by CSCULPT_BIN) misses the
 stack rule, the least pull toward "sum", x = full + b (sum - full) in steps of 0.05, that meets
 both rules, and what that x keeps of the frame ideal (its error as a share of sum's): what
-meeting the rule would cost `full` itself."""
+meeting the rule would cost `full` itself.
+
+With --alpha, it reads each case by what a merge cannot see: how the coarse deformer acts on
+the detail off the surface. Over the finest edit's support, the stack's departure from "sum"
+is split into a part along the frame ideal's departure, alpha * (frame - sum), and a rest
+across it (its size as a share of |frame - sum|). alpha is +1 where the deformer turns the
+volume as the surface turns (bends, twists: the ideals agree), about 0 where it shears it
+(tapers, a grab pulling along the detail: the stack keeps the detail's direction, as "sum"
+does) and negative where its Jacobian is symmetric (a Cast: the stack tilts the detail the
+other way). A merge that carries the detail by a share t of the surface's turn,
+x = sum + t (frame - sum), meets the frame rule for 0 < t < 2 and the stack rule for t in
+alpha -+ sqrt(2.25 alpha^2 + 1.25 across^2), exactly (the scores are RMS over the support, so
+both are quadratic in t); the intersection over all cases is what any one t can do."""
 import os
 import sys
 
@@ -95,6 +107,35 @@ def least_pull(binary, case_dir):
     return ratio, None, None
 
 
+def alpha_reading(case):
+    """(alpha, across, lo, hi) of a loaded case: the stack's departure from sum along and
+    across the frame ideal's, and the turn shares t meeting both rules (lo > hi: none)."""
+    finest, stack, frame, plain = case
+    n = np.linalg.norm(finest, axis=1)
+    sup = n > 1e-6 * max(1e-12, n.max()) + 1e-9
+    f, s = (frame - plain)[sup], (stack - plain)[sup]
+    ff = float((f * f).sum())
+    alpha = float((s * f).sum()) / ff
+    across2 = max(0.0, float((s * s).sum()) / ff - alpha * alpha)
+    reach = np.sqrt(2.25 * alpha * alpha + 1.25 * across2)
+    return alpha, np.sqrt(across2), max(alpha - reach, 0.0), min(alpha + reach, 2.0)
+
+
+def alpha_main(roots):
+    lo, hi = 0.0, 2.0
+    for case, path in case_dirs(roots):
+        data = load(path)
+        if rel_err(data[2], data[1], data[0]) < 0.01:
+            continue  # the ideals agree: any t near 1 meets both
+        alpha, across, a, b = alpha_reading(data)
+        print("%-34s alpha %+.2f  across %.2f  turn share t in (%.2f, %.2f]" %
+              (case, alpha, across, a, b) if a <= b else
+              "%-34s alpha %+.2f  across %.2f  no t meets both rules" % (case, alpha, across))
+        lo, hi = max(lo, a), min(hi, b)
+    print("every case: " + ("t in (%.2f, %.2f]; t = 1 is the frame ideal, t = 0 is sum" % (lo, hi)
+                            if lo <= hi else "no one t meets both rules"))
+
+
 def case_dirs(roots):
     for d in roots:
         for case in sorted(os.listdir(d)):
@@ -117,6 +158,8 @@ def pull_main(binary, roots):
 def main():
     if len(sys.argv) > 2 and sys.argv[1] == "--pull":
         return pull_main(sys.argv[2], sys.argv[3:])
+    if len(sys.argv) > 1 and sys.argv[1] == "--alpha":
+        return alpha_main(sys.argv[2:])
     lo, hi = 0.0, 1.0
     conflicting = []
     for case, path in case_dirs(sys.argv[1:]):
