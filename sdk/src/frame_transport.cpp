@@ -112,24 +112,30 @@ std::uint64_t position_hash(const Vec3f& p) {
   return h;
 }
 
-/// Groups the listed vertices that sit at the same base position (split seams), and gives
-/// every member of a group, per diff, the normalised sum of the members' rotations.
+/// Groups the listed vertices on an open rim that sit at the same base position (split
+/// seams), and gives every member of a group, per diff, the normalised sum of the members'
+/// rotations. Only a rim can open a crack: coincident vertices of closed parts that drift
+/// apart leave both surfaces whole. Most meshes have no rim, and then nothing is hashed.
 void Transport::find_seams() {
   share_rotations(group_coincident());
 }
 
-/// seam_of: per listed vertex, its group of coincident vertices (kNoSeam when alone), groups
-/// numbered in list order; returns how many groups there are.
+/// seam_of: per listed vertex, its group of coincident rim vertices (kNoSeam when alone or
+/// off the border), groups numbered in list order; returns how many groups there are.
 std::uint32_t Transport::group_coincident() {
   const std::size_t count = vertices_.size();
   auto& seam_of = scratch_.seam_of;
   seam_of.assign(count, kNoSeam);
+  std::size_t rim = 0;
+  for (const std::uint32_t v : vertices_) rim += topology_.border[v];
+  if (rim < 2) return 0;
   std::uint32_t groups = 0;
   std::size_t size = 64;
-  while (size < 2 * count) size *= 2;
+  while (size < 2 * rim) size *= 2;
   auto& table = scratch_.table;
   table.assign(size, 0);
   for (std::size_t at = 0; at < count; ++at) {
+    if (topology_.border[vertices_[at]] == 0) continue;
     const Vec3f& p = base_[vertices_[at]];
     for (std::size_t h = position_hash(p) & (size - 1);; h = (h + 1) & (size - 1)) {
       if (table[h] == 0) {

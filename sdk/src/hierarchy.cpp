@@ -291,6 +291,29 @@ void assign_parents(const Csr& adjacency, HierarchyLevel& fine, HierarchyLevel& 
   }
 }
 
+/// t.border from t.vertex_faces: a vertex is on the border when some other vertex shares
+/// exactly one of its triangles with it.
+void mark_border(Topology& t) {
+  t.border.assign(t.vertex_count, 0);
+  std::vector<std::uint32_t> others;
+  for (std::uint32_t v = 0; v < t.vertex_count; ++v) {
+    others.clear();
+    for (const std::uint32_t f : t.vertex_faces.row(v))
+      for (const std::uint32_t u : t.triangles[f])
+        if (u != v) others.push_back(u);
+    std::sort(others.begin(), others.end());
+    for (std::size_t i = 0; i < others.size();) {
+      std::size_t run = i + 1;
+      while (run < others.size() && others[run] == others[i]) ++run;
+      if (run - i == 1) {
+        t.border[v] = 1;
+        break;
+      }
+      i = run;
+    }
+  }
+}
+
 }  // namespace
 
 Topology Topology::build(std::uint32_t vertex_count, std::span<const Triangle> triangles) {
@@ -317,6 +340,7 @@ Topology Topology::build(std::uint32_t vertex_count, std::span<const Triangle> t
     for (std::uint32_t f = 0; f < triangles.size(); ++f)
       for (std::uint32_t v : triangles[f]) vf.items[cursor[v]++] = f;
   }
+  mark_border(t);
   // vertex -> vertices: two entries per triangle corner, then sort + unique per row
   auto& vv = t.vertex_vertices;
   vv.offsets.assign(vertex_count + 1, 0);

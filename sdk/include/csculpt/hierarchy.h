@@ -29,6 +29,9 @@ struct Topology {
   std::vector<Triangle> triangles;
   Csr vertex_faces;     ///< per vertex, incident triangles in increasing order
   Csr vertex_vertices;  ///< per vertex, distinct edge neighbours in increasing order
+  /// Per vertex: 1 where one of its edges belongs to a single triangle (an open rim). A split
+  /// seam is two such rims at one position.
+  std::vector<std::uint8_t> border;
 
   /// Throws InvalidInput on a triangle index >= vertex_count.
   static Topology build(std::uint32_t vertex_count, std::span<const Triangle> triangles);

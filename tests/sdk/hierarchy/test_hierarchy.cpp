@@ -366,6 +366,26 @@ TEST(HierarchyComponents, IsolatedVerticesAndSmallPieces) {
   EXPECT_EQ(h.levels().back().node_count, 3u);
 }
 
+TEST(TopologyBorder, OpenRimsOnly) {
+  // A closed surface has no border.
+  const Mesh sphere = make_sphere(500);
+  const Topology closed =
+      Topology::build(static_cast<std::uint32_t>(sphere.vertex_count()), sphere.triangles);
+  EXPECT_EQ(std::count(closed.border.begin(), closed.border.end(), 1), 0);
+  // A fan of three triangles around vertex 0, open between 4 and 1 (the hub's edges to 1
+  // and 4 belong to one triangle each); vertex 5 is on no triangle; three triangles share
+  // edge 6-7 (non-manifold) and are open at their other edges.
+  const std::vector<Triangle> tris = {{0, 1, 2}, {0, 2, 3}, {0, 3, 4}, {6, 7, 8}, {7, 6, 9},
+                                      {6, 7, 10}};
+  const Topology open = Topology::build(11, tris);
+  const std::vector<std::uint8_t> expected = {1, 1, 1, 1, 1, 0, 1, 1, 1, 1, 1};
+  EXPECT_EQ(open.border, expected);
+  // A tetrahedron: every edge in two triangles.
+  const std::vector<Triangle> tetra = {{0, 1, 2}, {0, 2, 3}, {0, 3, 1}, {1, 3, 2}};
+  const Topology shut = Topology::build(4, tetra);
+  EXPECT_EQ(std::count(shut.border.begin(), shut.border.end(), 1), 0);
+}
+
 TEST(HierarchyValidation, RejectsBadInput) {
   const std::vector<Triangle> bad = {{0, 1, 2}, {2, 1, 5}};
   EXPECT_THROW(Hierarchy::build(5, bad), InvalidInput);
