@@ -1,5 +1,5 @@
 # Builds merge cases from edits authored by Blender's own deformers.
-# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|house|extra|crumple]
+# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|house|extra|crumple|probe4|probe5|probe6]
 # (Debian 12: apt-get install blender assimp-testmodels). Add your own case() lines to author more.
 # public, public2: the sets of shared/eval/cases (this file began as shared/eval/make_cases.py);
 # held: tests/eval/cases (see its README.md), which also prints what each case holds;
@@ -501,6 +501,38 @@ def lattice(obj, moves):
     m = obj.modifiers.new("lattice", 'LATTICE'); m.object = cage
     return m
 
+def bumps(obj, size, strength, seed):
+    """a broad noise Displace along the normals: bumps far wider than a detail, as a coarse
+    inflate-and-deflate brush pass would leave"""
+    tex = bpy.data.textures.new("b%d" % seed, 'CLOUDS'); tex.noise_scale = size; tex.noise_depth = 0
+    m = obj.modifiers.new("bumps%d" % seed, 'DISPLACE')
+    m.texture = tex; m.strength = strength; m.mid_level = 0.5; m.texture_coords = 'GLOBAL'
+    return m
+
+def bumps_part(obj, center, radius, size, strength, seed):
+    m = bumps(obj, size, strength, seed); m.vertex_group = group(obj, "bumps%d" % seed, center, radius)
+    return m
+
+def hook(obj, center, offset, radius):
+    """a Hook: the region within radius (a smooth vertex group) follows an empty moved by
+    offset"""
+    e = empty(center)
+    m = obj.modifiers.new("hook", 'HOOK'); m.object = e; m.falloff_type = 'NONE'
+    m.vertex_group = group(obj, "hook", center, radius)
+    m.matrix_inverse = e.matrix_world.inverted()
+    e.location = plus(center, offset)
+    bpy.context.view_layer.update()
+    return m
+
+def shrinkwrap_part(obj, center, radius, sphere_radius):
+    """a Shrinkwrap of the region within radius onto a sphere about the origin"""
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=128, ring_count=64, radius=sphere_radius)
+    target = bpy.context.object; target.hide_render = True
+    bpy.context.view_layer.objects.active = obj
+    m = obj.modifiers.new("shrinkwrap", 'SHRINKWRAP'); m.target = target
+    m.wrap_method = 'NEAREST_SURFACEPOINT'; m.vertex_group = group(obj, "wrap", center, radius)
+    return m
+
 def near(o, p):
     """the base vertex nearest p: (position, Blender's normal)"""
     v = min(o.data.vertices, key=lambda v: (v.co - mathutils.Vector(p)).length)
@@ -681,6 +713,38 @@ elif which == "probe5":
          [lambda o: detail(o, kb(o), 0.25, 0.03, 106),
           lambda o: pinch(o, near(o, (0.1, 0.5, 0.2))[0], 0.2, 0.6),
           lambda o: twist(o, math.radians(40), 'Y')], "stack", details=[0, 1])
+elif which == "probe6":
+    # deformers no other set uses as the coarse edit (a broad noise Displace along the
+    # normals, a Smooth, a Hook, a Shrinkwrap onto a sphere), strong and weak details under
+    # them, and three artists mixing them; scored by hand, not kept
+    case("bumps_plus_detail_capsule", "capsule_lo",
+         [lambda o: detail(o, (0.4, 0, 0.5), 0.3, 0.05, 110),
+          lambda o: bumps(o, 0.8, 0.25, 111)], "stack", details=[0])
+    case("smooth_plus_detail_monkey", "monkey2",
+         [lambda o: detail(o, near(o, (0, -0.8, 0.4))[0], 0.3, 0.04, 112),
+          lambda o: smooth(o, (0, -0.6, 0.3), 0.9, 1.0, 30)], "stack", details=[0])
+    case("hook_plus_detail_wuson", "wuson",
+         [lambda o: detail(o, at("+y"), 0.25, 0.04, 113),
+          lambda o: hook(o, at("+y"), (0.05, 0.15, 0.1), 0.5)], "stack", details=[0])
+    case("shrinkwrap_plus_detail_torus", "torus_lo",
+         [lambda o: detail(o, (1, 0, 0.3), 0.3, 0.05, 114),
+          lambda o: shrinkwrap_part(o, (1.1, 0, 0.3), 0.6, 1.2)], "stack", details=[0])
+    case("bumps_plus_strong_detail_mocap", "mocap",
+         [lambda o: detail(o, at("+x"), 0.3, 0.09, 115),
+          lambda o: bumps(o, 0.6, 0.15, 116)], "stack", details=[0])
+    case("hook_plus_weak_detail_capsule", "capsule_lo",
+         [lambda o: detail(o, (0, 0.4, 0.3), 0.3, 0.012, 117),
+          lambda o: hook(o, (0, 0.4, 0.3), (0, 0.25, 0.15), 0.7)], "stack", details=[0])
+    case("three_artists_smooth_monkey", "monkey2",
+         [lambda o: detail(o, near(o, (0, -0.8, 0.4))[0], 0.25, 0.04, 118),
+          lambda o: pinch(o, near(o, (0.35, -0.75, 0.45))[0], 0.2, 0.6),
+          lambda o: smooth(o, (0, -0.6, 0.3), 1.0, 1.0, 20)], "stack", details=[0, 1])
+    case("smooth_plus_pinch_monkey", "monkey2",
+         [lambda o: pinch(o, near(o, (0.35, -0.75, 0.45))[0], 0.2, 0.6),
+          lambda o: smooth(o, (0, -0.6, 0.3), 1.0, 1.0, 20)], "stack", details=[0])
+    case("disjoint_bumps_capsule", "capsule_lo",
+         [lambda o: detail(o, (0.4, 0, 1.0), 0.25, 0.05, 119),
+          lambda o: bumps_part(o, (-0.4, 0, -0.8), 0.5, 0.8, 0.2, 120)], "stack", details=[0])
 elif which == "house":
     house_grab_case()
     case("cast_plus_detail_house", "house",
