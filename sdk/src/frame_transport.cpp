@@ -115,7 +115,7 @@ std::uint64_t position_hash(const Vec3f& p) {
 /// Groups the listed vertices on an open rim that sit at the same base position (split
 /// seams), and gives every member of a group, per diff, the normalised sum of the members'
 /// rotations. Only a rim can open a crack: coincident vertices of closed parts that drift
-/// apart leave both surfaces whole. Most meshes have no rim, and then nothing is hashed.
+/// apart leave both surfaces whole. A closed mesh has no rim, and then nothing is hashed.
 void Transport::find_seams() {
   share_rotations(group_coincident());
 }
