@@ -1,5 +1,5 @@
 # Builds merge cases from edits authored by Blender's own deformers.
-# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|house|extra|crumple|probe4|probe5|probe6]
+# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|house|extra|crumple|probe4|probe5|probe6|probe7]
 # (Debian 12: apt-get install blender assimp-testmodels). Add your own case() lines to author more.
 # public, public2: the sets of shared/eval/cases (this file began as shared/eval/make_cases.py);
 # held: tests/eval/cases (see its README.md), which also prints what each case holds;
@@ -745,6 +745,36 @@ elif which == "probe6":
     case("disjoint_bumps_capsule", "capsule_lo",
          [lambda o: detail(o, (0.4, 0, 1.0), 0.25, 0.05, 119),
           lambda o: bumps_part(o, (-0.4, 0, -0.8), 0.5, 0.8, 0.2, 120)], "stack", details=[0])
+elif which == "probe7":
+    # sideways details (a pinch, a tiny grab, a swirl) under every coarse kind, on meshes and
+    # pairings no other set has; scored by hand, not kept
+    case("cast_plus_pinch_torus", "torus_lo",
+         [lambda o: pinch(o, (1, 0, 0.3), 0.25, 0.6),
+          lambda o: cast(o, 0.5)], "stack", details=[0])
+    case("taper_plus_tinygrab_cube", "cube",
+         [lambda o: tiny_grab(o, (1, 0, 0.3), (0, 0.03, 0.03), 0.3),
+          lambda o: simple(o, 'TAPER', 0.7, 'Z')], "stack", details=[0])
+    case("bend_plus_swirl_mocap", "mocap",
+         [lambda o: local_twist(o, *LM["+x"], 0.25, math.radians(60)),
+          lambda o: bend(o, math.radians(70), 'X')], "stack", details=[0])
+    case("grab_plus_tinygrab_wuson", "wuson",
+         [lambda o: tiny_grab(o, at("+y"), (0.03, 0, 0.02), 0.2),
+          lambda o: grab(o, at("+y"), at("+y", 1, (0.1, 0.15, 0.1)), 0.6)], "stack", details=[0])
+    case("twist_plus_pinch_capsule", "capsule_lo",
+         [lambda o: pinch(o, (0.4, 0, 0.5), 0.25, 0.6),
+          lambda o: twist(o, math.radians(60), 'Z')], "stack", details=[0])
+    case("stretch_plus_swirl_torus", "torus_lo",
+         [lambda o: local_twist(o, (1.3, 0, 0), (1, 0, 0), 0.25, math.radians(60)),
+          lambda o: simple(o, 'STRETCH', 0.3, 'X')], "stack", details=[0])
+    case("four_artists_spider_shipped", "spider_shipped",
+         [lambda o: detail_along(o, at("+y"), 0.3, 0.05, 120, 'Y'),
+          lambda o: pinch(o, at("-y"), 0.2, 0.6),
+          lambda o: grab(o, at("+y", 0.9), at("+y", 0.9, (0.1, 0.1, 0.1)), 0.6),
+          lambda o: cast_part(o, 0.4, at("-y"), 0.8)], "stack", details=[0, 1])
+    case("three_artists_mocap_sideways", "mocap",
+         [lambda o: local_twist(o, *LM["+x"], 0.2, math.radians(60)),
+          lambda o: tiny_grab(o, at("-x"), (0, 0.03, 0.02), 0.2),
+          lambda o: bend(o, math.radians(60), 'Z')], "stack", details=[0, 1])
 elif which == "house":
     house_grab_case()
     case("cast_plus_detail_house", "house",
