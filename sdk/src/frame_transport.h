@@ -25,10 +25,12 @@
 //   (measured: 0.24 -> 0.03 rel_err for the chin pinch under a twist, four_artists_monkey).
 // - g_ij = (1 - s_ij) w_ij: whether i's frame carries j. w_ij = max(0, 2 a_ij - 1) with
 //   a_ij = E_ji^2 / (E_ij^2 + E_ji^2) and
-//   E_ij = sum_v |(R_i - I) d_j|^2, the change i's whole rotations would make to j's
-//   displacement (with the spin: a small grab's spin marks it as the finer edit);
-//   the coarser edit changes the finer one's displacement little and the finer edit's
-//   rotations would change the coarser's a lot, so the coarser edit carries the finer one
+//   E_ij = sum_v |(R_i - I) d_j|^2 + k_i |d_j|^2, the change i's deformation would make to
+//   j's displacement: its whole rotations (with the spin: a small grab's spin marks it as the
+//   finer edit) and k_i, twice the mean squared relative change of the edges around v under
+//   i (its stretch; a pinch or a small grab hardly turns the surface but squeezes and shears
+//   it); the coarser edit changes the finer one's displacement little and the finer edit's
+//   deformation would change the coarser's a lot, so the coarser edit carries the finer one
 //   (for a bump of width w on a bend of radius r the ratio is (r / w)^2). Edits of one scale
 //   (a_ij = 1/2) carry neither: they add, as strokes one after the other would. Every term is
 //   bounded by |(R_i - I) d_j|, so the result is continuous even where the weights switch.
