@@ -19,21 +19,30 @@ namespace {
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
 /// Builds rows from (row, item) pairs already counted: sorts and de-duplicates each row.
-void sort_unique_rows(Csr& csr) {
+void sort_rows(Csr& csr) {
+  for (std::size_t r = 0; r < csr.rows(); ++r)
+    std::sort(csr.items.begin() + csr.offsets[r], csr.items.begin() + csr.offsets[r + 1]);
+}
+
+/// Drops the repeats within each (sorted) row.
+void unique_rows(Csr& csr) {
   std::uint32_t write = 0;
   std::uint32_t begin = 0;
   for (std::size_t r = 0; r + 1 < csr.offsets.size(); ++r) {
     const std::uint32_t end = csr.offsets[r + 1];
     auto first = csr.items.begin() + begin;
-    auto last = csr.items.begin() + end;
-    std::sort(first, last);
-    last = std::unique(first, last);
+    auto last = std::unique(first, csr.items.begin() + end);
     csr.offsets[r] = write;
     for (auto it = first; it != last; ++it) csr.items[write++] = *it;
     begin = end;
   }
   csr.offsets.back() = write;
   csr.items.resize(write);
+}
+
+void sort_unique_rows(Csr& csr) {
+  sort_rows(csr);
+  unique_rows(csr);
 }
 
 /// Prefix sums counts (size rows+1, counts in [1..]) into offsets in place.
@@ -291,27 +300,21 @@ void assign_parents(const Csr& adjacency, HierarchyLevel& fine, HierarchyLevel& 
   }
 }
 
-/// t.border from t.vertex_faces: a vertex is on the border when some other vertex shares
-/// exactly one of its triangles with it.
-void mark_border(Topology& t) {
-  t.border.assign(t.vertex_count, 0);
-  std::vector<std::uint32_t> others;
-  for (std::uint32_t v = 0; v < t.vertex_count; ++v) {
-    others.clear();
-    for (const std::uint32_t f : t.vertex_faces.row(v))
-      for (const std::uint32_t u : t.triangles[f])
-        if (u != v) others.push_back(u);
-    std::sort(others.begin(), others.end());
-    for (std::size_t i = 0; i < others.size();) {
+/// border[v] from the sorted rows of `corners` (row v: the other two corners of every triangle
+/// at v, one entry per triangle): v is on the border when some other vertex shares exactly one
+/// of its triangles with it.
+std::vector<std::uint8_t> border_of(const Csr& corners) {
+  std::vector<std::uint8_t> border(corners.rows(), 0);
+  for (std::uint32_t v = 0; v < corners.rows(); ++v) {
+    const std::span<const std::uint32_t> row = corners.row(v);
+    for (std::size_t i = 0; i < row.size() && !border[v];) {
       std::size_t run = i + 1;
-      while (run < others.size() && others[run] == others[i]) ++run;
-      if (run - i == 1) {
-        t.border[v] = 1;
-        break;
-      }
+      while (run < row.size() && row[run] == row[i]) ++run;
+      border[v] = row[i] != v && run - i == 1;
       i = run;
     }
   }
+  return border;
 }
 
 }  // namespace
@@ -340,8 +343,8 @@ Topology Topology::build(std::uint32_t vertex_count, std::span<const Triangle> t
     for (std::uint32_t f = 0; f < triangles.size(); ++f)
       for (std::uint32_t v : triangles[f]) vf.items[cursor[v]++] = f;
   }
-  mark_border(t);
-  // vertex -> vertices: two entries per triangle corner, then sort + unique per row
+  // vertex -> vertices: two entries per triangle corner, then sort + unique per row (an edge
+  // of one triangle appears once in a sorted row: the border)
   auto& vv = t.vertex_vertices;
   vv.offsets.assign(vertex_count + 1, 0);
   for (const Triangle& tri : triangles)
@@ -358,7 +361,9 @@ Topology Topology::build(std::uint32_t vertex_count, std::span<const Triangle> t
       }
     }
   }
-  sort_unique_rows(vv);
+  sort_rows(vv);
+  t.border = border_of(vv);
+  unique_rows(vv);
   // A triangle that repeats a vertex would make it its own neighbour; drop self-links.
   std::uint32_t write = 0, begin = 0;
   for (std::uint32_t v = 0; v < vertex_count; ++v) {

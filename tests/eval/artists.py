@@ -29,10 +29,16 @@ def read_ply(path):
     return np.frombuffer(data, dtype="<f4", count=3 * nv, offset=end).reshape(nv, 3).astype(np.float64)
 
 
+def support(d):
+    """The vertices displacement d moves, as score_merge.py counts them."""
+    n = np.linalg.norm(d, axis=1)
+    return n > 1e-6 * max(1e-12, n.max()) + 1e-9
+
+
 def support_error(x, ideal, d):
     """RMS distance to the ideal over d's support, relative to d's RMS size."""
     n = np.linalg.norm(d, axis=1)
-    sup = n > 1e-6 * max(1e-12, n.max()) + 1e-9
+    sup = support(d)
     if not sup.any():
         return 0.0
     err = np.linalg.norm(x - ideal, axis=1)[sup]

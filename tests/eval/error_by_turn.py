@@ -92,7 +92,7 @@ def main():
     faces = read_faces(os.path.join(case, "base.ply"))
     largest, agreement = turn_measures(base, edits[coarsest], faces)
     size = np.linalg.norm(finest, axis=1)
-    support = size > 1e-6 * max(1e-12, size.max()) + 1e-9
+    support = artists.support(finest)
     scale = np.sqrt((size[support] ** 2).mean())
     results = {"full": artists.merge(binary, case, names, "full"), "sum": base + sum(ds)}
     ideals = [i for i in ("ideal", "ideal_frame") if os.path.exists(os.path.join(case, i + ".ply"))]

@@ -111,8 +111,7 @@ def alpha_reading(case):
     """(alpha, across, lo, hi) of a loaded case: the stack's departure from sum along and
     across the frame ideal's, and the turn shares t meeting both rules (lo > hi: none)."""
     finest, stack, frame, plain = case
-    n = np.linalg.norm(finest, axis=1)
-    sup = n > 1e-6 * max(1e-12, n.max()) + 1e-9
+    sup = artists.support(finest)
     f, s = (frame - plain)[sup], (stack - plain)[sup]
     ff = float((f * f).sum())
     alpha = float((s * f).sum()) / ff
