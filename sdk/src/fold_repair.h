@@ -10,12 +10,13 @@
 // addition's folds): around its vertices the merged positions are drawn toward plain
 // addition of the edits there (the frames that carried one edit into another undone); where
 // that still folds, the displacement field is smoothed; where even that folds (faces the base
-// already made slivers), the region is drawn toward the edit that moves it most. Each acts
-// fully at the fold and less with each ring of neighbours, more strongly on each attempt and
-// over the neighbours of any face still folded. It is local (a few rings around the faces), leaves
-// every vertex away from them bit-identical, and runs in the canonical order of the merge (so peers
-// agree bitwise). Where nothing folds it costs one face test around each moved vertex and allocates
-// nothing.
+// already made slivers), the region is drawn toward the edit that moves it most; whatever is
+// left is smoothed over a region that widens until it ends. Each acts fully at the fold and
+// less with each ring of neighbours, more strongly on each attempt and over the neighbours of
+// any face still folded; a phase that leaves more folds than it found is undone. It is local (rings
+// around the faces), leaves every vertex away from them bit-identical, and runs in the canonical
+// order of the merge (so peers agree bitwise). Where nothing folds it costs one face test around
+// each moved vertex and allocates nothing.
 #pragma once
 
 #include <cstdint>
@@ -37,6 +38,8 @@ constexpr std::uint8_t kNoSoleEdit = 0xff;
 struct FoldRepairScratch {
   std::vector<std::uint32_t> slot;   ///< per vertex: index in the moved list; kNone between calls
   std::vector<std::uint32_t> folds;  ///< faces currently folded anew
+  std::vector<std::uint32_t> found;  ///< the folds when the current phase began
+  std::vector<std::uint8_t> found_seed;                 ///< the seeds when the current phase began
   std::vector<std::vector<std::uint32_t>> chunk_folds;  ///< the first search's, per chunk
   std::vector<std::uint8_t> seed;       ///< per moved vertex: on a folded face in some attempt
   std::vector<std::uint32_t> ring;      ///< per moved vertex: rings from the nearest seed, or kNone
