@@ -341,6 +341,7 @@ class DemoRun {
       std::this_thread::sleep_for(Millis{10});
     }
     converge_s_ = seconds_between(t_sync, Clock::now());
+    if (!converged && error_.empty()) explain_divergence(published());
     phase_ = static_cast<int>(Phase::stop);
     for (const auto& p : peers_) p->thread.join();
     reporter_->report(published());
@@ -381,6 +382,23 @@ class DemoRun {
     for (const auto& p : peers_) s.push_back(p->snapshot());
     return s;
   }
+  /// What each peer still lacked when syncing timed out, one line per peer: the version it
+  /// holds, its strokes no merge has acknowledged, whether its mesh is the base plus nothing
+  /// pending and whether its base is the first peer's.
+  void explain_divergence(const std::vector<Published>& s) const {
+    using ull = unsigned long long;
+    for (std::uint32_t k = 0; k < sessions_; ++k) {
+      const Published& p = s[k];
+      std::fprintf(stderr,
+                   "  %s: version %llu, %llu strokes unacknowledged, local %s base, base %s %s's\n",
+                   peer_name(k).c_str(), ull(p.version), ull(p.unacknowledged),
+                   !p.digests                        ? "not yet hashed against"
+                   : p.local_digest == p.base_digest ? "="
+                                                     : "!=",
+                   p.base_digest == s[0].base_digest ? "=" : "!=", peer_name(0).c_str());
+    }
+  }
+
   /// Keeps the first artist's error; false once there is one.
   bool check_errors(const std::vector<Published>& s) {
     for (std::uint32_t k = 0; k < sessions_ && error_.empty(); ++k)

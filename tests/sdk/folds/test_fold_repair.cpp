@@ -116,6 +116,51 @@ TEST(FoldRepair, UnfoldsWhatNoDiffFoldedAndStaysLocal) {
   EXPECT_EQ(again, moved);
 }
 
+// A coarse stroke that nearly flattens two faces (c pushed 0.99 of an edge toward its right
+// neighbour) and folds a face beside them itself, carrying another artist's stroke that moves
+// c by a fiftieth of an edge: added, the two faces turn over. The artists' own fold is beside
+// them and addition folds them too, which the repair leaves alone as the artists crumpling
+// the surface only where the carried detail is a tenth of an edge or more: here there is no
+// detail to lose, so it repairs them (a quiet four-peer demo merge left two such folds).
+TEST(FoldRepair, RepairsAFoldATinyCarriedStrokeTipsBesideTheCarriersOwn) {
+  const std::uint32_t n = 25, c = 12 * n + 12;
+  const Mesh base = grid(n);
+  const Topology topology = Topology::build(std::uint32_t(base.vertex_count()), base.triangles);
+  Diff coarse = moving(base, c, {0.99f, 0.f, 0.f});
+  const Vec3f above = base.positions[c + n];
+  coarse.positions.indices.push_back(c + n);
+  coarse.positions.values.insert(coarse.positions.values.end(), {above.x + 1.5f, above.y, above.z});
+  const Diff tiny = moving(base, c, {0.02f, 0.f, 0.f});
+  const Diff* diffs[] = {&coarse, &tiny};
+  const double carrying[] = {0, 1, 0, 0};  // the coarse stroke carried the tiny one
+
+  std::vector<std::uint32_t> vertices = {c, c + n};
+  std::vector<Vec3f> moved = {add(base.positions[c], Vec3f{1.01f, 0.f, 0.f}),
+                              add(above, Vec3f{1.5f, 0.f, 0.f})};
+  auto as_diff = [&] {
+    Diff d;
+    d.vertex_count = static_cast<std::uint32_t>(base.vertex_count());
+    d.positions.indices = vertices;
+    for (const Vec3f& p : moved)
+      d.positions.values.insert(d.positions.values.end(), {p.x, p.y, p.z});
+    return d;
+  };
+  ASSERT_EQ(count_new_folds(base, std::span(diffs), as_diff()), 2u);
+
+  detail::FoldRepairScratch scratch;
+  detail::WorkerPool pool(1);
+  detail::repair_new_folds(topology, base.positions, vertices, std::span(diffs), {}, moved, scratch,
+                           pool, 4, carrying);
+  EXPECT_EQ(count_new_folds(base, std::span(diffs), as_diff()), 0u);
+  // What gave way is the tiny stroke's push, not the coarse stroke (its own fold included).
+  const Vec3f coarse_at[] = {add(base.positions[c], Vec3f{0.99f, 0.f, 0.f}),
+                             add(above, Vec3f{1.5f, 0.f, 0.f})};
+  for (std::size_t i = 0; i < vertices.size(); ++i) {
+    const Vec3f d = sub(moved[i], coarse_at[i]);
+    EXPECT_LE(std::sqrt(dot(d, d)), 0.02f) << "vertex " << vertices[i];
+  }
+}
+
 TEST(FoldRepair, NothingFoldedLeavesEveryPositionBitIdentical) {
   const std::uint32_t n = 9, c = 4 * n + 4;
   const Mesh base = grid(n);
