@@ -161,6 +161,44 @@ TEST(FoldRepair, RepairsAFoldATinyCarriedStrokeTipsBesideTheCarriersOwn) {
   }
 }
 
+// A coarse stroke lifts c and pushes it 0.99 of an edge toward its right neighbour (two faces
+// nearly on edge), carrying another artist's pinch that pushes c on by 0.13 of an edge and
+// folds faces of its own around c's upper neighbour. Added, the two faces turn over. The fold
+// beside is the carried pinch's, not the coarse stroke's: the coarse stroke moved the pinch's
+// crumple there, and the repair ends it (a grab carrying a pinch that folded a hundred faces of
+// its own left one to three such folds in quiet four-peer demos).
+TEST(FoldRepair, RepairsAFoldBesideACarriedDetailsOwnCrumple) {
+  const std::uint32_t n = 25, c = 12 * n + 12;
+  const Mesh base = grid(n);
+  const Topology topology = Topology::build(std::uint32_t(base.vertex_count()), base.triangles);
+  const Diff coarse = moving(base, c, {0.99f, 0.f, 1.f});
+  Diff pinch = moving(base, c, {0.13f, 0.f, 0.f});
+  const Vec3f above = base.positions[c + n];
+  pinch.positions.indices.push_back(c + n);
+  pinch.positions.values.insert(pinch.positions.values.end(), {above.x + 1.5f, above.y, above.z});
+  const Diff* diffs[] = {&coarse, &pinch};
+  const double carrying[] = {0, 1, 0, 0};  // the coarse stroke carried the pinch
+
+  std::vector<std::uint32_t> vertices = {c, c + n};
+  std::vector<Vec3f> moved = {add(base.positions[c], Vec3f{1.12f, 0.f, 1.f}),
+                              add(above, Vec3f{1.5f, 0.f, 0.f})};
+  auto as_diff = [&] {
+    Diff d;
+    d.vertex_count = static_cast<std::uint32_t>(base.vertex_count());
+    d.positions.indices = vertices;
+    for (const Vec3f& p : moved)
+      d.positions.values.insert(d.positions.values.end(), {p.x, p.y, p.z});
+    return d;
+  };
+  ASSERT_EQ(count_new_folds(base, std::span(diffs), as_diff()), 2u);
+
+  detail::FoldRepairScratch scratch;
+  detail::WorkerPool pool(1);
+  detail::repair_new_folds(topology, base.positions, vertices, std::span(diffs), {}, moved, scratch,
+                           pool, 4, carrying);
+  EXPECT_EQ(count_new_folds(base, std::span(diffs), as_diff()), 0u);
+}
+
 TEST(FoldRepair, NothingFoldedLeavesEveryPositionBitIdentical) {
   const std::uint32_t n = 9, c = 4 * n + 4;
   const Mesh base = grid(n);
