@@ -116,45 +116,61 @@ TEST(FoldRepair, UnfoldsWhatNoDiffFoldedAndStaysLocal) {
   EXPECT_EQ(again, moved);
 }
 
-// A coarse stroke that nearly flattens two faces (c pushed 0.99 of an edge toward its right
-// neighbour) and folds a face beside them itself, carrying another artist's stroke that moves
-// c by a fiftieth of an edge: added, the two faces turn over. The artists' own fold is beside
-// them and addition folds them too, which the repair leaves alone as the artists crumpling
-// the surface only where the carried detail is a tenth of an edge or more: here there is no
-// detail to lose, so it repairs them (a quiet four-peer demo merge left two such folds).
-TEST(FoldRepair, RepairsAFoldATinyCarriedStrokeTipsBesideTheCarriersOwn) {
-  const std::uint32_t n = 25, c = 12 * n + 12;
-  const Mesh base = grid(n);
-  const Topology topology = Topology::build(std::uint32_t(base.vertex_count()), base.triangles);
-  Diff coarse = moving(base, c, {0.99f, 0.f, 0.f});
-  const Vec3f above = base.positions[c + n];
-  coarse.positions.indices.push_back(c + n);
-  coarse.positions.values.insert(coarse.positions.values.end(), {above.x + 1.5f, above.y, above.z});
-  const Diff tiny = moving(base, c, {0.02f, 0.f, 0.f});
-  const Diff* diffs[] = {&coarse, &tiny};
-  const double carrying[] = {0, 1, 0, 0};  // the coarse stroke carried the tiny one
+/// A diff moving v by `by` and u > v by `u_by`.
+Diff moving_two(const Mesh& base, std::uint32_t v, Vec3f by, std::uint32_t u, Vec3f u_by) {
+  Diff d = moving(base, v, by);
+  const Vec3f p = add(base.positions[u], u_by);
+  d.positions.indices.push_back(u);
+  d.positions.values.insert(d.positions.values.end(), {p.x, p.y, p.z});
+  return d;
+}
 
-  std::vector<std::uint32_t> vertices = {c, c + n};
-  std::vector<Vec3f> moved = {add(base.positions[c], Vec3f{1.01f, 0.f, 0.f}),
-                              add(above, Vec3f{1.5f, 0.f, 0.f})};
-  auto as_diff = [&] {
+/// The new folds of the merged positions `moved` (of `vertices`) of `coarse` and `carried`
+/// before and after the repair, told that `coarse` carried `carried` (the transport's w = 1);
+/// `moved` holds the repaired positions afterwards.
+std::pair<std::uint32_t, std::uint32_t> repair_carried(const Mesh& base, const Diff& coarse,
+                                                       const Diff& carried,
+                                                       const std::vector<std::uint32_t>& vertices,
+                                                       std::vector<Vec3f>& moved) {
+  const Topology topology = Topology::build(std::uint32_t(base.vertex_count()), base.triangles);
+  const Diff* diffs[] = {&coarse, &carried};
+  const double carrying[] = {0, 1, 0, 0};
+  auto new_folds = [&] {
     Diff d;
     d.vertex_count = static_cast<std::uint32_t>(base.vertex_count());
     d.positions.indices = vertices;
     for (const Vec3f& p : moved)
       d.positions.values.insert(d.positions.values.end(), {p.x, p.y, p.z});
-    return d;
+    return count_new_folds(base, std::span(diffs), d);
   };
-  ASSERT_EQ(count_new_folds(base, std::span(diffs), as_diff()), 2u);
-
+  const std::uint32_t before = new_folds();
   detail::FoldRepairScratch scratch;
   detail::WorkerPool pool(1);
   detail::repair_new_folds(topology, base.positions, vertices, std::span(diffs), {}, moved, scratch,
                            pool, 4, carrying);
-  EXPECT_EQ(count_new_folds(base, std::span(diffs), as_diff()), 0u);
+  return {before, new_folds()};
+}
+
+// A coarse stroke that nearly flattens two faces (c pushed 0.99 of an edge toward its right
+// neighbour) and folds a face beside them itself, carrying another artist's stroke that moves
+// c by a fiftieth of an edge: added, the two faces turn over. The coarse stroke's own fold is
+// beside them and addition folds them too, which the repair leaves alone as the artists
+// crumpling the surface only where the carried detail is a tenth of an edge or more: here
+// there is no detail to lose, so it repairs them (a quiet four-peer demo merge left two such
+// folds).
+TEST(FoldRepair, RepairsAFoldATinyCarriedStrokeTipsBesideTheCarriersOwn) {
+  const std::uint32_t n = 25, c = 12 * n + 12;
+  const Mesh base = grid(n);
+  const Diff coarse = moving_two(base, c, {0.99f, 0.f, 0.f}, c + n, {1.5f, 0.f, 0.f});
+  const Diff tiny = moving(base, c, {0.02f, 0.f, 0.f});
+  const std::vector<std::uint32_t> vertices = {c, c + n};
+  const std::vector<Vec3f> coarse_at = {add(base.positions[c], Vec3f{0.99f, 0.f, 0.f}),
+                                        add(base.positions[c + n], Vec3f{1.5f, 0.f, 0.f})};
+  std::vector<Vec3f> moved = {add(coarse_at[0], Vec3f{0.02f, 0.f, 0.f}), coarse_at[1]};
+  const auto [before, after] = repair_carried(base, coarse, tiny, vertices, moved);
+  ASSERT_EQ(before, 2u);
+  EXPECT_EQ(after, 0u);
   // What gave way is the tiny stroke's push, not the coarse stroke (its own fold included).
-  const Vec3f coarse_at[] = {add(base.positions[c], Vec3f{0.99f, 0.f, 0.f}),
-                             add(above, Vec3f{1.5f, 0.f, 0.f})};
   for (std::size_t i = 0; i < vertices.size(); ++i) {
     const Vec3f d = sub(moved[i], coarse_at[i]);
     EXPECT_LE(std::sqrt(dot(d, d)), 0.02f) << "vertex " << vertices[i];
@@ -170,33 +186,13 @@ TEST(FoldRepair, RepairsAFoldATinyCarriedStrokeTipsBesideTheCarriersOwn) {
 TEST(FoldRepair, RepairsAFoldBesideACarriedDetailsOwnCrumple) {
   const std::uint32_t n = 25, c = 12 * n + 12;
   const Mesh base = grid(n);
-  const Topology topology = Topology::build(std::uint32_t(base.vertex_count()), base.triangles);
   const Diff coarse = moving(base, c, {0.99f, 0.f, 1.f});
-  Diff pinch = moving(base, c, {0.13f, 0.f, 0.f});
-  const Vec3f above = base.positions[c + n];
-  pinch.positions.indices.push_back(c + n);
-  pinch.positions.values.insert(pinch.positions.values.end(), {above.x + 1.5f, above.y, above.z});
-  const Diff* diffs[] = {&coarse, &pinch};
-  const double carrying[] = {0, 1, 0, 0};  // the coarse stroke carried the pinch
-
-  std::vector<std::uint32_t> vertices = {c, c + n};
+  const Diff pinch = moving_two(base, c, {0.13f, 0.f, 0.f}, c + n, {1.5f, 0.f, 0.f});
   std::vector<Vec3f> moved = {add(base.positions[c], Vec3f{1.12f, 0.f, 1.f}),
-                              add(above, Vec3f{1.5f, 0.f, 0.f})};
-  auto as_diff = [&] {
-    Diff d;
-    d.vertex_count = static_cast<std::uint32_t>(base.vertex_count());
-    d.positions.indices = vertices;
-    for (const Vec3f& p : moved)
-      d.positions.values.insert(d.positions.values.end(), {p.x, p.y, p.z});
-    return d;
-  };
-  ASSERT_EQ(count_new_folds(base, std::span(diffs), as_diff()), 2u);
-
-  detail::FoldRepairScratch scratch;
-  detail::WorkerPool pool(1);
-  detail::repair_new_folds(topology, base.positions, vertices, std::span(diffs), {}, moved, scratch,
-                           pool, 4, carrying);
-  EXPECT_EQ(count_new_folds(base, std::span(diffs), as_diff()), 0u);
+                              add(base.positions[c + n], Vec3f{1.5f, 0.f, 0.f})};
+  const auto [before, after] = repair_carried(base, coarse, pinch, {c, c + n}, moved);
+  ASSERT_EQ(before, 2u);
+  EXPECT_EQ(after, 0u);
 }
 
 TEST(FoldRepair, NothingFoldedLeavesEveryPositionBitIdentical) {
