@@ -13,10 +13,10 @@
 // already made slivers), the region is drawn toward the edit that moves it most; whatever is
 // left is smoothed over a region that widens until it ends. Each acts fully at the fold and
 // less with each ring of neighbours, more strongly on each attempt and over the neighbours of
-// any face still folded; a phase that leaves more folds than it found is undone. It is local (rings
-// around the faces), leaves every vertex away from them bit-identical, and runs in the canonical
-// order of the merge (so peers agree bitwise). Where nothing folds it costs one face test around
-// each moved vertex and allocates nothing.
+// any face still folded; each phase ends at its best attempt (its start, if none did better). It is
+// local (rings around the faces), leaves every vertex away from them bit-identical, and runs in the
+// canonical order of the merge (so peers agree bitwise). Where nothing folds it costs one face test
+// around each moved vertex and allocates nothing.
 #pragma once
 
 #include <cstdint>
@@ -38,8 +38,9 @@ constexpr std::uint8_t kNoSoleEdit = 0xff;
 struct FoldRepairScratch {
   std::vector<std::uint32_t> slot;   ///< per vertex: index in the moved list; kNone between calls
   std::vector<std::uint32_t> folds;  ///< faces currently folded anew
-  std::vector<std::uint32_t> found;  ///< the folds when the current phase began
-  std::vector<std::uint8_t> found_seed;                 ///< the seeds when the current phase began
+  std::vector<Vec3f> best;           ///< per moved vertex: at the phase's best attempt
+  std::vector<std::uint32_t> best_folds;                ///< the folds the best attempt left
+  std::vector<std::uint8_t> best_seed;                  ///< the seeds when the best attempt ended
   std::vector<std::vector<std::uint32_t>> chunk_folds;  ///< the first search's, per chunk
   std::vector<std::uint8_t> seed;       ///< per moved vertex: on a folded face in some attempt
   std::vector<std::uint32_t> ring;      ///< per moved vertex: rings from the nearest seed, or kNone
