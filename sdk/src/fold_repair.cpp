@@ -50,7 +50,7 @@ struct Phase {
 /// three rings ends most of the rest: in sessions that rebase runs of strokes (the crease test
 /// of test_merge_fidelity.cpp, sixteen seeds) it took `full` from 2x addition's creases to
 /// 0.9x; two rings left more folds to the last phase (1.1x), five smoothed across neighbouring
-/// strokes (0.94x). The last phase fades over six rings: where two strong brushes cross, what
+/// strokes (0.94x). The dominant phase fades over six rings: where two strong brushes cross, what
 /// gives way is a displacement many edges long, and removing it over two rings folded the
 /// band's own edge (a four-artist session's merge: 401 folds left, none over six rings).
 /// Last, smoothing again, widening by a ring every second attempt while folds remain.
@@ -84,10 +84,10 @@ constexpr double kRelaxRate = 0.5;
 constexpr double kKeepRatio = 100.0;
 
 /// The least detail (the carried edits' displacement from the carrier's, in edge lengths of
-/// the face) whose fold beside an artist's own is left as the artists' crumpling. Below it
-/// the repair loses nothing visible, and a stroke nearly flattening a face was tipped over by
-/// another artist's stroke moving it by a hundredth of an edge (two new folds in a quiet
-/// four-peer demo, seed 3). The crumpling cases carry 0.41 edges or more
+/// the face) whose fold beside the carrier's own is left as the artists' crumpling. Below it
+/// the repair loses nothing visible, and a stroke nearly flattening a face (and folding others
+/// beside it) was tipped over by another artist's stroke moving it by a hundredth of an edge:
+/// two new folds in a quiet four-peer demo, seed 3. The crumpling cases carry 0.41 edges or more
 /// (`bend_plus_crumpling_detail_mocap`); a bent keyboard's detail 0.013-0.03, and repairing
 /// those moves its error by 0.0001.
 constexpr double kDetailEdges = 0.1;
