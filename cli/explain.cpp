@@ -32,9 +32,6 @@ Vec3d minus(const Vec3f& a, const Vec3f& b) {
 double squared(const Vec3d& v) {
   return dot(v, v);
 }
-double length(const Vec3d& v) {
-  return std::sqrt(squared(v));
-}
 
 /// sqrt(mean(values[i]^2)) over `indices`; NaN when there are none (the scorer's nan).
 double rms_over(const std::vector<double>& values, const std::vector<std::uint32_t>& indices) {

@@ -2,7 +2,6 @@
 #include "fold_repair.h"
 
 #include <algorithm>
-#include <cmath>
 
 #include "csculpt/vec3.h"
 #include "fold_test.h"
@@ -158,7 +157,6 @@ struct Repair {
   /// How far the other diffs, added, move `t`'s corners from where `carrier` alone puts them
   /// (the largest), in units of `t`'s mean base edge length.
   double carried_detail(const Triangle& t, std::size_t carrier) const {
-    auto length = [](const Vec3d& d) { return std::sqrt(dot(d, d)); };
     double most = 0, edges = 0;
     for (int k = 0; k < 3; ++k)
       edges += length(sub(widen(base[t[(k + 1) % 3]]), widen(base[t[k]])));

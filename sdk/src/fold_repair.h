@@ -13,10 +13,10 @@
 // already made slivers), the region is drawn toward the edit that moves it most; whatever is
 // left is smoothed over a region that widens until it ends. Each acts fully at the fold and
 // less with each ring of neighbours, more strongly on each attempt and over the neighbours of
-// any face still folded; each phase ends at its best attempt (its start, if none did better). It is
-// local (rings around the faces), leaves every vertex away from them bit-identical, and runs in the
-// canonical order of the merge (so peers agree bitwise). Where nothing folds it costs one face test
-// around each moved vertex and allocates nothing.
+// any face still folded; each phase ends at its best attempt (its start, if none did better).
+// It is local (rings around the faces), leaves every vertex away from them bit-identical, and
+// runs in the canonical order of the merge (so peers agree bitwise). Where nothing folds it
+// costs one face test around each moved vertex and allocates nothing.
 #pragma once
 
 #include <cstdint>

@@ -207,7 +207,7 @@ double Transport::edge_length(std::uint32_t v) const {
   double area = 0;
   std::size_t faces = 0;
   for (std::uint32_t f : topology_.vertex_faces.row(v)) {
-    area += std::sqrt(norm2(face_cross(f))) / 2;
+    area += length(face_cross(f)) / 2;
     ++faces;
   }
   return faces ? std::sqrt(4 / std::sqrt(3.0) * area / static_cast<double>(faces)) : 0.0;
@@ -261,7 +261,7 @@ Quat Transport::carrier(std::size_t at, std::size_t i, double level) const {
 Vec3d Transport::base_normal(std::uint32_t v) const {
   Vec3d sum{};
   for (std::uint32_t f : topology_.vertex_faces.row(v)) sum = add(sum, face_cross(f));
-  const double len = std::sqrt(norm2(sum));
+  const double len = length(sum);
   return len > 0 ? scale(sum, 1.0 / len) : Vec3d{};
 }
 
@@ -275,7 +275,7 @@ void Transport::share_normals() {
     if (seam_of[at] != kNoSeam)
       shared[seam_of[at]] = add(shared[seam_of[at]], base_normal(vertices_[at]));
   for (Vec3d& n : shared) {
-    const double len = std::sqrt(norm2(n));
+    const double len = length(n);
     n = len > 0 ? scale(n, 1.0 / len) : Vec3d{};
   }
 }
@@ -319,7 +319,7 @@ double Transport::faces_agree(std::uint32_t v, std::size_t i) const {
     const Vec3d a = face_cross(f);
     const Vec3d p0 = edited_position(i, t[0]);
     const Vec3d b = cross(sub(edited_position(i, t[1]), p0), sub(edited_position(i, t[2]), p0));
-    const double la = std::sqrt(norm2(a)), lb = std::sqrt(norm2(b));
+    const double la = length(a), lb = length(b);
     if (!(la > 0) || !(lb > 0)) continue;  // a degenerate face says nothing
     Vec4d q = turn_between(scale(a, 1 / la), scale(b, 1 / lb));
     if (faces == 0) first = q;
@@ -370,7 +370,7 @@ void Transport::load_displacements(std::size_t at, VertexState& s) const {
     } else {
       s.d[i] = {};
     }
-    s.size[i] = std::sqrt(norm2(s.d[i]));
+    s.size[i] = length(s.d[i]);
   }
 }
 
@@ -428,9 +428,9 @@ double Transport::ring_stretch(std::size_t at, std::size_t i) const {
   double sum = 0;
   std::size_t edges = 0;
   for (const std::uint32_t u : topology_.vertex_vertices.row(v)) {
-    const double before = std::sqrt(norm2(sub(widen(base_[u]), b)));
+    const double before = length(sub(widen(base_[u]), b));
     if (!(before > 0)) continue;  // a collapsed edge says nothing
-    const double change = std::sqrt(norm2(sub(edited_position(i, u), e))) / before - 1;
+    const double change = length(sub(edited_position(i, u), e)) / before - 1;
     sum += change * change;
     ++edges;
   }
@@ -470,7 +470,7 @@ constexpr double kSameTolerance = 0.001;
 double sameness(const VertexState& s, std::size_t i, std::size_t j) {
   const double m = kSameTolerance * std::min(s.size[i], s.size[j]);
   if (!(m > 0)) return 0;
-  const double r = std::max(0.0, 1.0 - std::sqrt(norm2(sub(s.d[i], s.d[j]))) / m);
+  const double r = std::max(0.0, 1.0 - length(sub(s.d[i], s.d[j])) / m);
   return r * r;
 }
 

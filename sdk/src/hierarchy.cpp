@@ -18,7 +18,7 @@ namespace {
 
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
-/// Builds rows from (row, item) pairs already counted: sorts and de-duplicates each row.
+/// Sorts each row's items.
 void sort_rows(Csr& csr) {
   for (std::size_t r = 0; r < csr.rows(); ++r)
     std::sort(csr.items.begin() + csr.offsets[r], csr.items.begin() + csr.offsets[r + 1]);
@@ -40,6 +40,7 @@ void unique_rows(Csr& csr) {
   csr.items.resize(write);
 }
 
+/// Builds rows from (row, item) pairs already counted: sorts and de-duplicates each row.
 void sort_unique_rows(Csr& csr) {
   sort_rows(csr);
   unique_rows(csr);
