@@ -10,13 +10,14 @@
 // addition's folds): around its vertices the merged positions are drawn toward plain
 // addition of the edits there (the frames that carried one edit into another undone); where
 // that still folds, the displacement field is smoothed; where even that folds (faces the base
-// already made slivers), the region is drawn toward the edit that moves it most; whatever is
-// left is smoothed over a region that widens until it ends. Each acts fully at the fold and
-// less with each ring of neighbours, more strongly on each attempt and over the neighbours of
-// any face still folded; each phase ends at its best attempt (its start, if none did better).
-// It is local (rings around the faces), leaves every vertex away from them bit-identical, and
-// runs in the canonical order of the merge (so peers agree bitwise). Where nothing folds it
-// costs one face test around each moved vertex and allocates nothing.
+// already made slivers), the region is drawn toward the shape the edit moving it most gives it,
+// placed where the merge put it; whatever is left is smoothed over a region that widens until
+// it ends. Each acts fully at the fold and less with each ring of neighbours, more strongly on
+// each attempt and over the neighbours of any face still folded; each phase ends at its best
+// attempt (its start, if none did better). It is local (rings around the faces), leaves every
+// vertex away from them bit-identical, and runs in the canonical order of the merge (so peers
+// agree bitwise). Where nothing folds it costs one face test around each moved vertex and
+// allocates nothing.
 #pragma once
 
 #include <cstdint>
@@ -48,6 +49,9 @@ struct FoldRepairScratch {
   std::vector<std::uint32_t> dominant;  ///< per part: the diff moving it most
   std::vector<std::uint8_t> keeps;      ///< per part: that diff is kept by the relax phase
   std::vector<double> energy;           ///< per diff: squared displacement over one part
+  std::vector<Vec3d> offset;            ///< per part: the merge's mean displacement from the
+                                        ///< dominant diff at its seeds (the shape remedy)
+  std::vector<std::uint32_t> count;     ///< per part: its seeds
   std::vector<std::uint32_t> region, frontier, next;
   std::vector<Vec3f> start;    ///< per moved vertex: its position when the current phase began
   std::vector<Vec3d> relaxed;  ///< per region vertex: its smoothed displacement in a sweep

@@ -232,6 +232,30 @@ TEST(FoldRepair, FullFoldsNothingNewOnTheAuthoredCasesThatFolded) {
   }
 }
 
+// Captured from a quiet four-peer demo (seed 3), cut to the 16 rings around the fold: a face
+// an earlier stroke crumpled to a tenth of an edge, turned over among its neighbours, which
+// two artists' grabs move by 4-5 edges (30-60 of its own sizes) in different directions.
+// Either grab alone keeps it as it was; added, they turn it back (addition folds it too).
+// Pulled toward the grab that moves it most, placed where that grab alone puts it, the
+// region's fade was as steep as the other grab is long and folded the face again; placed
+// where the merge put the region, only the other grab's change of shape gives way.
+TEST(FoldRepair, AFaceCrumpledInTheBaseKeepsItsSideUnderTwoGrabs) {
+  const fs::path d = fs::path(CSCULPT_SDK_TEST_DATA) / "crumpled_face_under_two_grabs";
+  const Mesh base = read_mesh((d / "base.ply").string());
+  std::vector<Diff> diffs;
+  for (const char* e : {"a.ply", "b.ply"})
+    diffs.push_back(capture_diff(base, read_mesh((d / e).string())));
+  const Hierarchy h = Hierarchy::build(base);
+  std::vector<const Diff*> inputs = {&diffs[0], &diffs[1]};
+  Merger merger(h);
+  ASSERT_GT(count_new_folds(h.topology(), base, inputs,
+                            merger.merge(base, std::span<const Diff>(diffs), MergeMethod::sum)),
+            0u);
+  const Diff merged = merger.merge(base, std::span<const Diff>(diffs), MergeMethod::full);
+  EXPECT_GT(merger.last_timings().new_folds_repaired, 0u) << "the merge folded nothing to repair";
+  EXPECT_EQ(count_new_folds(h.topology(), base, inputs, merged), 0u);
+}
+
 // What a session merges under load: each of four artists' scripted strokes (the demo's
 // scripts) accumulated over a long interval, all merged at once. Strong brushes of two or
 // three artists cross there; repairing their folds toward one artist's edit over a narrow
