@@ -50,11 +50,12 @@ bool MergerRole::accept(PeerId author, std::span<const std::uint8_t> diff_bytes,
   return true;
 }
 
-MergeOutcome MergerRole::merge(const Mesh& base, std::uint64_t version, std::uint64_t chain,
-                               const MergeFrame& frame, const EncodeOptions& wire) {
+MergeOutcome MergerRole::merge(Submits submits, const Mesh& base, std::uint64_t version,
+                               std::uint64_t chain, const MergeFrame& frame,
+                               const EncodeOptions& wire) {
   const auto t0 = Clock::now();
   std::vector<const Diff*> diffs;
-  for (const auto& [peer, p] : pending_) diffs.push_back(&p.diff);
+  for (const auto& [peer, p] : submits) diffs.push_back(&p.diff);
   Diff merged = merger_.merge(base, diffs, MergeMethod::full, frame);
   // What everyone applies is the decoded message, the merger included.
   DiffHeader header;
@@ -72,15 +73,14 @@ MergeOutcome MergerRole::merge(const Mesh& base, std::uint64_t version, std::uin
   for (const Diff* d : diffs) sets.push_back(touched(*d));
   const std::vector<bool> conflicting = conflicts(sets, base.vertex_count());
   std::size_t k = 0;
-  for (const auto& [author, p] : pending_) {
+  for (const auto& [author, p] : submits) {
     r.merged.push_back({author, p.sequence, p.strokes});
     out.merged_strokes += p.strokes;
     if (conflicting[k]) r.conflicting += p.strokes;
     r.contributions.push_back(measure_contribution(author, p.diff, base, sets[k], frame.scale));
     ++k;
   }
-  last_inputs_ = std::move(pending_);
-  pending_.clear();
+  last_inputs_ = std::move(submits);
   last_merged_ = std::move(merged);
   return out;
 }

@@ -7,6 +7,7 @@
 #include <map>
 #include <memory>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "csculpt/diff.h"
@@ -29,6 +30,9 @@ struct PendingSubmit {
   Diff diff;                   ///< decoded against the agreed version's mesh
 };
 
+/// Submits by author: the latest of each for one version.
+using Submits = std::map<PeerId, PendingSubmit>;
+
 /// A merge's result: the version to publish and what it cost.
 struct MergeOutcome {
   VersionRecord record;
@@ -48,15 +52,20 @@ class MergerRole {
   bool accept(PeerId author, std::span<const std::uint8_t> diff_bytes, std::uint32_t strokes,
               const Mesh& base, std::uint64_t version, const MergeFrame& frame);
   bool empty() const { return pending_.empty(); }
+  /// The held submits, which the role then forgets: the next merge's inputs, merged by merge()
+  /// on the merge worker's thread while this role takes the next ones.
+  Submits take_pending() { return std::exchange(pending_, {}); }
   /// Forgets what `author` sent (it left) or everything (the version moved on, the merger
   /// changed).
   void forget(PeerId author) { pending_.erase(author); }
   void clear() { pending_.clear(); }
 
-  /// Merges every held submit into the version after `version` (chain `chain`, mesh `base`)
-  /// and forgets them. The record's diff is encoded with `wire`; its chain is that of the
-  /// decoded diff, which every peer (this one too) applies. Needs !empty().
-  MergeOutcome merge(const Mesh& base, std::uint64_t version, std::uint64_t chain,
+  /// Merges `submits` (take_pending(), not empty) into the version after `version` (chain
+  /// `chain`, mesh `base`). The record's diff is encoded with `wire`; its chain is that of the
+  /// decoded diff, which every peer (this one too) applies. Touches only the merge's own state
+  /// (not the held submits): accept(), forget() and clear() may run on another thread
+  /// meanwhile.
+  MergeOutcome merge(Submits submits, const Mesh& base, std::uint64_t version, std::uint64_t chain,
                      const MergeFrame& frame, const EncodeOptions& wire);
 
   /// The new folds (csculpt/folds.h) the last merge made on `base` (the mesh it merged on),
@@ -64,14 +73,16 @@ class MergerRole {
   /// of a large stroke's merge at 320K faces). Forgets that merge's inputs; 0 when there were
   /// fewer than two.
   std::uint32_t count_last_folds(const Mesh& base);
+  /// Forgets the last merge's inputs uncounted (its version was never published).
+  void forget_last() { last_inputs_.clear(); }
 
  private:
   std::shared_ptr<const Hierarchy> hierarchy_;  // kept alive for merger_ and folds_
   Merger merger_;
-  FoldCounter folds_;                        // the merge's quality count
-  std::map<PeerId, PendingSubmit> pending_;  // author -> its latest submit for this version
+  FoldCounter folds_;  // the merge's quality count
+  Submits pending_;    // author -> its latest submit for this version
   // the last merge's inputs and result, until count_last_folds
-  std::map<PeerId, PendingSubmit> last_inputs_;
+  Submits last_inputs_;
   Diff last_merged_;
 };
 

@@ -79,6 +79,7 @@ void PeerNode::loop() {
     try {
       transport_.wait(next_deadline() - Clock::now());
       receive_all();
+      finish_merge();
       if (!run_commands()) break;
       run_timers(Clock::now());
       publish_stats();
@@ -670,13 +671,33 @@ void PeerNode::send_presence(Clock::time_point now) {
 }
 
 void PeerNode::merge_pending() {
-  if (!joined_ || !merger_ || merger_->empty() || hold_merges(Clock::now())) return;
+  if (!joined_ || !merger_ || merger_->empty() || merge_worker_.busy() || hold_merges(Clock::now()))
+    return;
   // A new merger first catches up with the most advanced live peer (fetching as heartbeats
   // show the gap), so it never publishes a version number someone already holds.
   for (const auto& [peer, vc] : reported_)
     if (membership_.contains(peer) && vc.first > replication_.version()) return;
-  MergeOutcome o =
-      merger_->merge(base_, replication_.version(), replication_.chain(), frame_, options_.wire);
+  merge_start_ = {replication_.version(), replication_.chain()};
+  // The worker merges on copies: base_ and frame_ change if another merger's version or a
+  // snapshot arrives meanwhile (the outcome is then dropped).
+  merge_worker_.start([&role = *merger_, submits = merger_->take_pending(), base = base_,
+                       start = merge_start_, frame = frame_, wire = options_.wire]() mutable {
+    return role.merge(std::move(submits), base, start.version, start.chain, frame, wire);
+  });
+}
+
+void PeerNode::finish_merge() {
+  std::optional<MergeOutcome> outcome = merge_worker_.take();
+  if (!outcome) return;
+  MergeOutcome& o = *outcome;
+  // The session moved on while the worker merged (another merger's version, a snapshot, or
+  // this peer no longer merges): the merged submits' authors send them again, rebased onto
+  // the version they now hold or to the new merger.
+  if (!merger_ || !election_.is_merger() || replication_.version() != merge_start_.version ||
+      replication_.chain() != merge_start_.chain) {
+    if (merger_) merger_->forget_last();
+    return;
+  }
   const Bytes message = version_message(header(), o.record, false);
   broadcast(message);
   const std::uint32_t folds = merger_->count_last_folds(base_);  // base_: the merged-on mesh
@@ -697,6 +718,7 @@ void PeerNode::merge_pending() {
 }
 
 void PeerNode::build_merge_state() {
+  merge_worker_.drop();  // its merge uses the role replaced here
   hierarchy_ = std::make_shared<const Hierarchy>(
       Hierarchy::build(static_cast<std::uint32_t>(base_.vertex_count()), base_.triangles));
   merger_.emplace(hierarchy_);

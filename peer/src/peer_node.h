@@ -20,6 +20,7 @@
 #include "csculpt/peer/session.h"
 #include "host_channel.h"
 #include "journal.h"
+#include "merge_worker.h"
 #include "merger_role.h"
 #include "messages.h"
 #include "peer_table.h"
@@ -144,7 +145,10 @@ class PeerNode {
   /// reached the merger while it was behind.
   void resend_own_submit_if_caught_up(std::uint64_t version, std::uint64_t chain);
   void send_presence(Clock::time_point now);
+  /// Starts a merge of the held submits on the merge worker (one at a time).
   void merge_pending();
+  /// Publishes the worker's finished merge, if the session is still where it began.
+  void finish_merge();
   void build_merge_state();
 
   // events and stats
@@ -202,6 +206,16 @@ class PeerNode {
   Clock::time_point next_divergence_check_{};  // one snapshot request per 4 heartbeats
   Clock::time_point next_snapshot_request_{};  // while one is awaited, not before this
   Clock::time_point last_snapshot_chunk_{};    // when the last chunk came
+
+  /// Where the session stood when the merge in flight began: its outcome is published only
+  /// if this peer still merges and still holds that version at that chain.
+  struct MergeStart {
+    std::uint64_t version = 0, chain = 0;
+  };
+  MergeStart merge_start_;
+  /// Declared after what its merges use (merger_, transport_'s wake-up), so it is joined
+  /// before they go.
+  MergeWorker merge_worker_{[this] { transport_.wake(); }};
 
   std::vector<std::uint64_t> inbound_;  // aligned copy of a misaligned message
   std::thread thread_;

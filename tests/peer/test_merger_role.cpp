@@ -56,11 +56,11 @@ TEST(MergerRole, KeepsOnlySubmitsOnTheAgreedVersionAndTheLatestPerAuthor) {
   const Diff b = stroke_diff(f.base, {0, 1, 0}, {0, 0, 0.2f});
   EXPECT_TRUE(
       f.role.accept(1, f.submit(b, 4, 1), 7, f.base, 4, f.frame));  // older sequence: ignored
-  const MergeOutcome o = f.role.merge(f.base, 4, 99, f.frame, {});
+  const MergeOutcome o = f.role.merge(f.role.take_pending(), f.base, 4, 99, f.frame, {});
   ASSERT_EQ(o.record.merged.size(), 1u);
   EXPECT_EQ(o.record.merged[0].sequence, 2u);
   EXPECT_EQ(o.merged_strokes, 1u);
-  EXPECT_TRUE(f.role.empty());  // merged submits are forgotten
+  EXPECT_TRUE(f.role.empty());  // taken for the merge, no longer held
   EXPECT_THROW(f.role.accept(1, Bytes{1, 2, 3}, 1, f.base, 5, f.frame), InvalidInput);
 }
 
@@ -70,7 +70,7 @@ TEST(MergerRole, MergeMakesAVersionEveryReplicaAccepts) {
   const Diff b = stroke_diff(f.base, {0, 0, -1}, {0, 0.2f, 0});
   ASSERT_TRUE(f.role.accept(10, f.submit(a, 0, 1), 3, f.base, 0, f.frame));
   ASSERT_TRUE(f.role.accept(20, f.submit(b, 0, 1), 4, f.base, 0, f.frame));
-  const MergeOutcome o = f.role.merge(f.base, 0, kGenesisChain, f.frame, {});
+  const MergeOutcome o = f.role.merge(f.role.take_pending(), f.base, 0, kGenesisChain, f.frame, {});
   const VersionRecord& r = o.record;
   EXPECT_EQ(r.version, 1u);
   EXPECT_EQ(r.parent_chain, kGenesisChain);
@@ -98,7 +98,9 @@ TEST(MergerRole, CountsConflictingStrokes) {
   f.role.accept(1, f.submit(a, 0, 1), 2, f.base, 0, f.frame);
   f.role.accept(2, f.submit(b, 0, 1), 3, f.base, 0, f.frame);
   f.role.accept(3, f.submit(c, 0, 1), 5, f.base, 0, f.frame);
-  EXPECT_EQ(f.role.merge(f.base, 0, kGenesisChain, f.frame, {}).record.conflicting, 5u);
+  EXPECT_EQ(
+      f.role.merge(f.role.take_pending(), f.base, 0, kGenesisChain, f.frame, {}).record.conflicting,
+      5u);
 }
 
 TEST(MergerRole, ForgetsALeaversSubmit) {

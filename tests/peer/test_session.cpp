@@ -3,13 +3,16 @@
 // SIGKILL live in test_processes.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <thread>
+#include <vector>
 
 #include "csculpt/diff.h"
 #include "csculpt/error.h"
+#include "csculpt/hierarchy.h"
 #include "csculpt/merge.h"
 #include "csculpt/peer/session.h"
 #include "csculpt/testkit/generate.h"
@@ -289,6 +292,68 @@ TEST(Session, LateJoinerGetsTheCurrentVersionAndMergerFailoverKeepsEdits) {
            c.session->stats().strokes_acknowledged == 1;
   }));
   EXPECT_EQ(c.session->stats().merger, 2u);
+}
+
+// A merge that takes longer than the others wait before taking a silent peer for dead (two
+// artists' long runs of strokes over a whole sphere, merged at once: what a loaded machine or
+// a healed partition hands the merger) must not silence the merger. The expiry is set from a
+// merge of the same edits timed here, a third of it, so the premise holds in any build
+// (sanitizers slow both alike): the merger's heartbeats go on beside its merge, nobody
+// expires it, and the session converges on one merger.
+TEST(Session, AMergeLongerThanTheExpiryLeavesEveryoneAMember) {
+  const Mesh sphere = make_sphere(320000);
+  const auto t_build = Clock::now();
+  const Hierarchy h = Hierarchy::build(sphere);  // what each joiner builds
+  const auto build_time = std::chrono::duration_cast<Millis>(Clock::now() - t_build);
+  std::vector<Mesh> edits(2, sphere);
+  for (std::size_t k = 0; k < edits.size(); ++k)
+    for (const Stroke& s : scripted_strokes(sphere, 17 + k, 256, /*paint=*/false))
+      apply_stroke(edits[k], s, &h.topology());
+  const std::vector<Diff> diffs = {capture_diff(sphere, edits[0]), capture_diff(sphere, edits[1])};
+  Merger merger(h);
+  const auto t0 = Clock::now();
+  merger.merge(sphere, diffs, MergeMethod::full);
+  const auto merge_time = std::chrono::duration_cast<Millis>(Clock::now() - t0);
+  const Millis expired = std::max(Millis{150}, merge_time / 3);
+  auto options = [&](PeerId id) {
+    SessionOptions o = fast_options(id);
+    o.membership = {expired / 8, expired / 2, expired};
+    // The first merge comes one interval after the start: long after the two joins (each
+    // builds a hierarchy) and both submits, so it merges the two together.
+    o.sync = Millis{2000} + 4 * merge_time + 8 * build_time;
+    return o;
+  };
+  Artist a{Session::create(sphere, options(1)), sphere};
+  Artist b{Session::join(a.session->invite(), options(2)), {}};
+  Artist c{Session::join(a.session->invite(), options(3)), {}};
+  // Joining builds a hierarchy on the joiner's network thread, which may silence it for an
+  // expiry: what counts is what happens once all three hold the mesh and hear each other.
+  auto all_members = [&] {
+    return a.session->peers().size() == 2 && b.session->peers().size() == 2 &&
+           c.session->peers().size() == 2;
+  };
+  ASSERT_TRUE(wait_until(all_members, Millis{60000}));
+  std::this_thread::sleep_for(2 * expired);
+  ASSERT_TRUE(wait_until(all_members, Millis{60000}));
+  for (Artist* x : {&a, &b, &c}) x->session->poll_events();
+  b.local = edits[0];
+  c.local = edits[1];
+  b.session->submit(b.local, 64);
+  c.session->submit(c.local, 64);
+  ASSERT_TRUE(run_until(
+      {&a, &b, &c},
+      [&] {
+        return converged({&a, &b, &c}) && b.session->stats().strokes_acknowledged == 64 &&
+               c.session->stats().strokes_acknowledged == 64;
+      },
+      Millis{120000}));
+  ASSERT_GT(a.session->stats().merge_ms_max, double(expired.count()))
+      << "the merge (timed " << merge_time.count() << " ms) was not longer than the expiry";
+  for (Artist* x : {&a, &b, &c}) {
+    for (const Event& e : x->session->poll_events())
+      EXPECT_NE(e.kind, EventKind::peer_left) << "peer " << e.peer << " expired";
+    EXPECT_EQ(x->session->stats().merger, 1u);
+  }
 }
 
 }  // namespace
