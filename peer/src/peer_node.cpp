@@ -390,6 +390,7 @@ void PeerNode::on_snapshot_chunk(const fb::SnapshotChunk& c) {
 void PeerNode::install_snapshot(std::shared_ptr<const Snapshot> snap) {
   const std::optional<std::uint64_t> fork =
       joined_ ? replication_.fork_point(snap->chains) : std::nullopt;
+  drop_merge();
   base_ = snap->mesh;
   replication_.reset(snapshot_.version(), snapshot_.chain(), snap->chains);
   snapshot_requested_ = false;
@@ -489,6 +490,7 @@ void PeerNode::report_revived() {
 
 /// Applies a version that follows ours, hands it to the host and keeps it for fetches.
 void PeerNode::apply_version(VersionRecord r, Diff* merged_here) {
+  drop_merge();
   Diff merged;
   if (merged_here) {
     merged = std::move(*merged_here);
@@ -678,12 +680,21 @@ void PeerNode::merge_pending() {
   for (const auto& [peer, vc] : reported_)
     if (membership_.contains(peer) && vc.first > replication_.version()) return;
   merge_start_ = {replication_.version(), replication_.chain()};
-  // The worker merges on copies: base_ and frame_ change if another merger's version or a
-  // snapshot arrives meanwhile (the outcome is then dropped).
-  merge_worker_.start([&role = *merger_, submits = merger_->take_pending(), base = base_,
+  // The worker reads base_ in place: nothing changes it while the merge runs (drop_merge).
+  merge_worker_.start([&role = *merger_, submits = merger_->take_pending(), &base = base_,
                        start = merge_start_, frame = frame_, wire = options_.wire]() mutable {
     return role.merge(std::move(submits), base, start.version, start.chain, frame, wire);
   });
+}
+
+void PeerNode::drop_merge() {
+  // Another merger's version or a snapshot replaces the mesh the merge began on, so its outcome
+  // could not be published anyway; waiting keeps base_ unchanged while the worker reads it. A
+  // peer applies such a version while it merges only when catching up (a fetch's replay) or
+  // recovering from divergence: rarely, and never on the path of an edit.
+  if (!merge_worker_.busy()) return;
+  merge_worker_.drop();
+  if (merger_) merger_->forget_last();
 }
 
 void PeerNode::finish_merge() {
@@ -718,7 +729,7 @@ void PeerNode::finish_merge() {
 }
 
 void PeerNode::build_merge_state() {
-  merge_worker_.drop();  // its merge uses the role replaced here
+  drop_merge();  // its merge uses the role replaced here
   hierarchy_ = std::make_shared<const Hierarchy>(
       Hierarchy::build(static_cast<std::uint32_t>(base_.vertex_count()), base_.triangles));
   merger_.emplace(hierarchy_);

@@ -149,6 +149,9 @@ class PeerNode {
   void merge_pending();
   /// Publishes the worker's finished merge, if the session is still where it began.
   void finish_merge();
+  /// Before base_ changes other than by our own merge: waits for the merge in flight, if
+  /// any, and forgets it.
+  void drop_merge();
   void build_merge_state();
 
   // events and stats
