@@ -185,7 +185,10 @@ class Keyed {
     pump(std::chrono::milliseconds(50));
     std::string counts;
     for (const auto& [what, n] : sent_)
-      counts += (counts.empty() ? "" : ",") + std::string("\"") + what + "\":" + std::to_string(n);
+      counts.append(counts.empty() ? "\"" : ",\"")
+          .append(what)
+          .append("\":")
+          .append(std::to_string(n));
     say("{\"event\":\"done\",\"rounds\":" + std::to_string(rounds) + ",\"sent\":{" + counts + "}}");
     return 0;
   }

@@ -264,7 +264,7 @@ std::string encode(const PlySpec& spec, const std::string& format) {
         const auto& values = l.values[i];
         if (ascii) {
           out += std::to_string(values.size());
-          for (double v : values) out += " " + text(l.type, v);
+          for (double v : values) out.append(" ").append(text(l.type, v));
           out += " ";
         } else {
           put(out, l.count_type, static_cast<double>(values.size()), big);
