@@ -1,7 +1,8 @@
 // The network thread of one peer: PeerNode owns the transport, membership and election, the
 // replication state, the merger role and the snapshot assembly, and glues them together. It
-// sleeps in zmq_poll until a message, a host command (HostChannel + Transport::wake) or its
-// next timer (heartbeat, merge). Its only link to the host thread is the HostChannel.
+// sleeps in zmq_poll until a message, a host command (HostChannel + Transport::wake), a merge the
+// MergeWorker finished, or its next timer (heartbeat, merge). Its only link to the host thread
+// is the HostChannel; merges run on the worker's thread (merge_worker.h).
 #pragma once
 
 #include <cstdint>
