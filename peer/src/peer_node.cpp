@@ -679,11 +679,11 @@ void PeerNode::merge_pending() {
   // show the gap), so it never publishes a version number someone already holds.
   for (const auto& [peer, vc] : reported_)
     if (membership_.contains(peer) && vc.first > replication_.version()) return;
-  merge_start_ = {replication_.version(), replication_.chain()};
   // The worker reads base_ in place: nothing changes it while the merge runs (drop_merge).
   merge_worker_.start([&role = *merger_, submits = merger_->take_pending(), &base = base_,
-                       start = merge_start_, frame = frame_, wire = options_.wire]() mutable {
-    return role.merge(std::move(submits), base, start.version, start.chain, frame, wire);
+                       version = replication_.version(), chain = replication_.chain(),
+                       frame = frame_, wire = options_.wire]() mutable {
+    return role.merge(std::move(submits), base, version, chain, frame, wire);
   });
 }
 
@@ -701,12 +701,11 @@ void PeerNode::finish_merge() {
   std::optional<MergeOutcome> outcome = merge_worker_.take();
   if (!outcome) return;
   MergeOutcome& o = *outcome;
-  // The session moved on while the worker merged (another merger's version, a snapshot, or
-  // this peer no longer merges): the merged submits' authors send them again, rebased onto
-  // the version they now hold or to the new merger.
-  if (!merger_ || !election_.is_merger() || replication_.version() != merge_start_.version ||
-      replication_.chain() != merge_start_.chain) {
-    if (merger_) merger_->forget_last();
+  // The version and chain it merged on still hold (whatever changes them drops the merge
+  // first, drop_merge). If this peer no longer merges, the merged submits' authors send them
+  // to the new merger.
+  if (!election_.is_merger()) {
+    merger_->forget_last();
     return;
   }
   const Bytes message = version_message(header(), o.record, false);

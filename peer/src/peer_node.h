@@ -148,7 +148,7 @@ class PeerNode {
   void send_presence(Clock::time_point now);
   /// Starts a merge of the held submits on the merge worker (one at a time).
   void merge_pending();
-  /// Publishes the worker's finished merge, if the session is still where it began.
+  /// Publishes the worker's finished merge, if this peer still merges.
   void finish_merge();
   /// Before base_ changes other than by our own merge: waits for the merge in flight, if
   /// any, and forgets it.
@@ -211,12 +211,6 @@ class PeerNode {
   Clock::time_point next_snapshot_request_{};  // while one is awaited, not before this
   Clock::time_point last_snapshot_chunk_{};    // when the last chunk came
 
-  /// Where the session stood when the merge in flight began: its outcome is published only
-  /// if this peer still merges and still holds that version at that chain.
-  struct MergeStart {
-    std::uint64_t version = 0, chain = 0;
-  };
-  MergeStart merge_start_;
   /// Declared after what its merges use (merger_, transport_'s wake-up), so it is joined
   /// before they go.
   MergeWorker merge_worker_{[this] { transport_.wake(); }};

@@ -50,7 +50,7 @@ struct FoldRepairScratch {
   std::vector<std::uint8_t> keeps;      ///< per part: that diff is kept by the relax phase
   std::vector<double> energy;           ///< per diff: squared displacement over one part
   std::vector<Vec3d> offset;            ///< per part: the merge's mean displacement from the
-                                        ///< dominant diff at its seeds (the shape remedy)
+                                        ///< dominant diff at its seeds (the dominant remedy)
   std::vector<std::uint32_t> count;     ///< per part: its seeds
   std::vector<std::uint32_t> region, frontier, next;
   std::vector<Vec3f> start;    ///< per moved vertex: its position when the current phase began
