@@ -512,8 +512,9 @@ CSC_API csc_status csc_session_copy_base(csc_mesh** out, const csc_session* sess
  *  session mesh) to the merger, replacing what was sent before for this version; `strokes`
  *  counts the strokes made since the last submit. Changed values in `local` are set to what
  *  the peers receive (within the wire tolerance). `*sent` (may be NULL) is 1 if something was
- *  sent, 0 if there was nothing new (the strokes changed nothing the session does not hold or
- *  was not sent already: they count as acknowledged at once). Copies the arrays once each way
+ *  sent, 0 if there was nothing new (the strokes changed nothing the session does not hold:
+ *  they count as acknowledged at once; or nothing beyond the submit still waiting for its
+ *  version: they are acknowledged with it). Copies the arrays once each way
  *  (O(vertices)). */
 CSC_API csc_status csc_session_submit(csc_session* session, const csc_vertex_arrays* local,
                                       uint32_t strokes, int32_t* sent);
@@ -536,7 +537,9 @@ CSC_API csc_status csc_session_submit_changed(csc_session* session, const csc_ve
 
 /** Applies the merged versions received so far and rebases `local` onto them (written in
  *  place). A submitted edit that a version did not include (it reached the merger after the
- *  merge) is sent again at once. `*applied` (may be NULL) is the number of versions applied. */
+ *  merge) is sent again at once, unless the host changed `local` since its submit: the next
+ *  submit then carries it with the new strokes, counted. `*applied` (may be NULL) is the
+ *  number of versions applied. */
 CSC_API csc_status csc_session_update(csc_session* session, const csc_vertex_arrays* local,
                                       uint32_t* applied);
 

@@ -1398,8 +1398,9 @@ class Session(_Handle):
         """Sends the edit from the agreed version to the host's arrays, replacing what was
         sent before for this version; `strokes` counts strokes made since the last submit.
         Changed values are rewritten in place to what the peers receive (within the wire
-        tolerance). Returns False when there was nothing new to send (the strokes then count as
-        acknowledged at once: they changed nothing the session does not hold or was not sent)."""
+        tolerance). Returns False when there was nothing new to send: the strokes changed nothing
+        the session does not hold (acknowledged at once), or nothing beyond the submit still
+        waiting for its version (acknowledged with it)."""
         _check_strokes(strokes)
         ptr, arrays, keep = self._arrays(positions, channels)
         sent = c_int32()

@@ -490,14 +490,11 @@ void PeerNode::report_revived() {
 
 /// Applies a version that follows ours, hands it to the host and keeps it for fetches.
 void PeerNode::apply_version(VersionRecord r, Diff* merged_here) {
+  // Checked before the merge in flight is dropped (the check only reads base_, as the worker
+  // does): a version that fails, forged or corrupt, must not cost the submits being merged.
+  Diff merged = merged_here ? std::move(*merged_here) : replication_.check(r, base_);
   drop_merge();
-  Diff merged;
-  if (merged_here) {
-    merged = std::move(*merged_here);
-    replication_.append(std::move(r), merged, base_);
-  } else {
-    merged = replication_.accept(std::move(r), base_);
-  }
+  replication_.append(std::move(r), merged, base_);
   const VersionRecord& kept = replication_.latest();
   const std::uint64_t version = replication_.version();
   // Submits held for the old version (a merger catching up by fetch) no longer apply: their

@@ -56,6 +56,12 @@ std::optional<VersionRecord> Replication::take_next_buffered() {
 }
 
 Diff Replication::accept(VersionRecord r, Mesh& base) {
+  Diff merged = check(r, base);
+  append(std::move(r), merged, base);
+  return merged;
+}
+
+Diff Replication::check(const VersionRecord& r, const Mesh& base) const {
   DiffHeader header;
   Diff merged = decode_diff(r.diff_bytes, base, &header);
   if (header.base_version != version_)
@@ -63,7 +69,6 @@ Diff Replication::accept(VersionRecord r, Mesh& base) {
                        std::to_string(header.base_version));
   if (next_chain(chain_, merged) != r.chain)
     throw InvalidInput("version " + std::to_string(r.version) + " fails its hash chain");
-  append(std::move(r), merged, base);
   return merged;
 }
 

@@ -63,6 +63,8 @@ class Replication {
   /// answer fetches. Returns the decoded diff. Throws InvalidInput, leaving everything as it
   /// was, for a version that does not follow ours or fails its chain.
   Diff accept(VersionRecord r, Mesh& base);
+  /// accept()'s checks alone, changing nothing: `r`'s decoded diff, or InvalidInput.
+  Diff check(const VersionRecord& r, const Mesh& base) const;
   /// The same for a version this peer merged, whose decoded diff (`merged`, the merger's
   /// encode gave it) and chain it made itself: nothing to decode or check again.
   void append(VersionRecord r, const Diff& merged, Mesh& base);

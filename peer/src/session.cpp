@@ -368,9 +368,16 @@ bool Session::Impl::send(const Diff& d, Mesh& local, std::uint32_t strokes) {
 }
 
 bool Session::Impl::nothing_to_send(bool at_base, std::uint32_t strokes) {
-  // These strokes changed nothing the session does not hold or has not sent already: they are
-  // acknowledged as they are, not left unacknowledged for ever.
   strokes_submitted += strokes;
+  // These strokes changed nothing beyond a submit still waiting for its version: they are
+  // there when it is, and acknowledged with it.
+  if (!at_base && !submitted.empty()) {
+    unacknowledged_strokes += strokes;
+    strokes_at[submitted.rbegin()->first] = unacknowledged_strokes;
+    return false;
+  }
+  // They changed nothing the session does not hold: acknowledged as they are, not left
+  // unacknowledged for ever.
   strokes_acknowledged += strokes;
   // The host's mesh is the agreed base and nothing of ours is in flight: strokes sent before
   // are in the base (a snapshot carried them) or the host took them back. None waits for a
@@ -556,7 +563,8 @@ std::size_t Session::Impl::update(Mesh& local, const std::span<const std::uint32
   wrote_all = false;
   // A submit that a version did not include (it reached the merger after the merge, based on
   // the older version) is sent again, rebased, once the versions are applied: the host does
-  // not have to notice.
+  // not have to notice. Unless the host edited since: then the resend would carry strokes the
+  // host has not counted yet, and its next submit, which counts them, carries both.
   bool resend = false;
   if (changed) require_in_range(*changed, "update");  // a host's mistake, even with no version
   for (HostItem& item : node->host().take_items()) pending.push_back(std::move(item));
@@ -568,6 +576,7 @@ std::size_t Session::Impl::update(Mesh& local, const std::span<const std::uint32
     ready_for(local, "update");
     unedited = holds_only_submitted(local, changed);
   }
+  const bool host_edited = !unedited;
   std::size_t done = 0;  // pending[0, done) are applied: a failure keeps the rest for the next call
   try {
     while (done < pending.size()) {
@@ -599,7 +608,7 @@ std::size_t Session::Impl::update(Mesh& local, const std::span<const std::uint32
   pending.clear();
   versions_applied += applied;
   // The touched vertices are exact after a rebase: the resend need not capture the whole mesh.
-  if (resend && !local.positions.empty()) {
+  if (resend && !local.positions.empty() && !host_edited) {
     gather({}, "update");
     capture_diff_at(base, local, candidates, captured);
     send(captured, local, 0);

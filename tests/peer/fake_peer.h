@@ -10,7 +10,9 @@
 #include <string>
 #include <vector>
 
+#include "csculpt/diff.h"
 #include "csculpt/peer/session.h"
+#include "csculpt/wire.h"
 #include "messages.h"
 #include "transport.h"
 
@@ -37,6 +39,20 @@ class FakePeer {
     epoch_ = epoch;
     merger_ = id_;
     send(elected_message(header(), id_));
+  }
+
+  /// A version in our name: `diff` (a DiffMessage on version `v` - 1) naming the submits it
+  /// `merged`, with the chains given (a real merger's: next_chain of the decoded diff); a
+  /// `replay` is a fetch's answer, taken from any member.
+  Bytes version(const Bytes& diff, std::uint64_t v, std::uint64_t parent_chain, std::uint64_t chain,
+                std::vector<MergedSubmit> merged = {}, bool replay = false) const {
+    VersionRecord r;
+    r.version = v;
+    r.parent_chain = parent_chain;
+    r.chain = chain;
+    r.diff_bytes = diff;
+    r.merged = std::move(merged);
+    return version_message(header(), r, replay);
   }
 
   /// Serves the member's connection to us (ZAP) for `span`, handing what it sends to `seen`
@@ -71,5 +87,16 @@ class FakePeer {
   Transport transport_;
   std::vector<std::uint64_t> inbound_;  // aligned copy of a misaligned message
 };
+
+/// An edit of `base` (version `base_version`) that moves `vertex`, as a DiffMessage.
+inline Bytes edit_message(const Mesh& base, std::uint64_t base_version, std::uint32_t vertex) {
+  Mesh edited = base;
+  edited.positions.at(vertex).y += 0.05f;
+  DiffHeader h;
+  h.base_version = base_version;
+  h.sequence = base_version + 1;
+  h.author = "merge";
+  return encode_diff(capture_diff(base, edited), base, h, EncodeOptions{});
+}
 
 }  // namespace csculpt::peer::testing

@@ -13,7 +13,9 @@
 #include "csculpt/diff.h"
 #include "csculpt/peer/session.h"
 #include "csculpt/testkit/generate.h"
+#include "csculpt/wire.h"
 #include "fake_peer.h"
+#include "replication.h"
 #include "sessions.h"
 
 namespace {
@@ -23,14 +25,16 @@ using namespace csculpt::peer;
 using namespace csculpt::peer::testing;
 using namespace std::chrono_literals;
 
-/// What the fake merger saw of the real peer: its submits (their diff bytes) and the chain its
-/// heartbeats gave for each version.
+/// What the fake merger saw of the real peer: its submits (their diff bytes and the strokes
+/// they said they carry) and the chain its heartbeats gave for each version.
 struct Seen {
   std::vector<std::vector<std::uint8_t>> submits;
+  std::vector<std::uint32_t> strokes;
   std::uint64_t version = 0, chain = 0;
   void operator()(const fb::Envelope& env) {
     if (const auto* s = env.body_as_Submit()) {
       submits.emplace_back(s->diff()->begin(), s->diff()->end());
+      strokes.push_back(s->strokes());
     } else if (const auto* hb = env.body_as_Heartbeat()) {
       version = hb->version();
       chain = hb->chain();
@@ -49,6 +53,7 @@ struct AuthorAndFakeMerger {
   Mesh local = author->base();
   FakePeer merger{author->invite(), 1};
   Seen seen;
+  std::uint64_t chain = 0;  ///< of the latest version the fake published
 
   /// Joins the fake, which then claims the merger's role; true once the author follows it and
   /// has said (heartbeat) that it holds `author_version`.
@@ -67,6 +72,31 @@ struct AuthorAndFakeMerger {
     nudge(local, vertex, 0.05f);
     const std::size_t before = seen.submits.size();
     return author->submit(local, 1) && submits_reach(before + 1);
+  }
+  /// The fake holds version 0 as the author does and takes its submits.
+  bool fake_merges_version_0() {
+    merger.says(0, 0, 1);
+    if (!fake_merges(0)) return false;
+    chain = seen.chain;
+    merger.says(0, chain, 1);
+    pump(100ms);
+    return true;
+  }
+  /// The fake publishes `version`: `diff` on the author's current base, naming `merged`;
+  /// true once the author's host applied it.
+  bool publish(std::uint64_t version, const Bytes& diff, std::vector<MergedSubmit> merged) {
+    const std::uint64_t parent = chain;
+    chain = next_chain(parent, decode_diff(diff, author->base()));
+    merger.send(merger.version(diff, version, parent, chain, std::move(merged)));
+    merger.says(version, chain, 1);
+    return wait_until([&] {
+      pump(20ms);
+      author->update(local);
+      return author->version() == version;
+    });
+  }
+  std::uint64_t sequence_of(std::size_t submit) const {
+    return peek_diff_header(seen.submits.at(submit)).sequence;
   }
   bool submits_reach(std::size_t n) {
     return wait_until([&] {
@@ -116,8 +146,9 @@ TEST(SessionResend, ASubmitTheMergerCouldTakeIsNotSentAgain) {
 }
 
 // A submit no version took (stale at the merger), whose edit the host then took back: the
-// resend after the next version finds nothing to send, and the strokes are settled, not left
-// unacknowledged for ever (a host waiting for them would wait for ever).
+// host's next submit (it submits while strokes are unacknowledged, as every host does) finds
+// nothing to send, and the strokes are settled, not left unacknowledged for ever (a host
+// waiting for them would wait for ever).
 TEST(SessionResend, StrokesWithNothingLeftToSendAreNotLeftUnacknowledged) {
   const Mesh sphere = make_sphere(400);
   auto a = Session::create(sphere, fast_options(1, "a"));
@@ -139,6 +170,8 @@ TEST(SessionResend, StrokesWithNothingLeftToSendAreNotLeftUnacknowledged) {
     b->update(mine);
     return b->version() == 1;
   }));
+  EXPECT_EQ(b->stats().strokes_acknowledged, 0u);
+  EXPECT_FALSE(b->submit(mine, 0));
   EXPECT_EQ(b->stats().strokes_submitted, 2u);
   EXPECT_EQ(b->stats().strokes_acknowledged, 2u);
   EXPECT_TRUE(mine.positions == b->base().positions);
@@ -158,6 +191,56 @@ TEST(SessionResend, AnEditWithinTheWireToleranceIsNotSentAndMakesNoVersion) {
   EXPECT_FALSE(wait_until([&] { return a->update(local) > 0; }, 300ms));
   EXPECT_EQ(a->version(), 0u);
   EXPECT_EQ(a->stats().submits, 0u);
+}
+
+// A version left the author's submit out, and meanwhile the host made a stroke it has not
+// submitted yet. update() does not send the submit again by itself: the resend would carry that
+// stroke while saying it carries one stroke fewer, so the merger would count fewer strokes than
+// the author acknowledges. The host's next submit carries both, counted.
+TEST(SessionResend, AnUnmergedSubmitWaitsForTheHostsSubmitWhenTheHostEditedSince) {
+  AuthorAndFakeMerger t;
+  ASSERT_TRUE(t.fake_merges_version_0());
+  ASSERT_TRUE(t.submit_edit(40));
+  nudge(t.local, 120, 0.05f);  // a stroke, not submitted yet
+  ASSERT_TRUE(t.publish(1, edit_message(t.author->base(), 0, 100), {}));
+  t.pump(300ms);
+  t.author->update(t.local);
+  EXPECT_EQ(t.seen.submits.size(), 1u);
+  ASSERT_TRUE(t.author->submit(t.local, 1));
+  ASSERT_TRUE(t.submits_reach(2));
+  EXPECT_EQ(t.seen.strokes[1], 2u);  // the unmerged stroke and the new one
+  EXPECT_EQ(peek_diff_header(t.seen.submits[1]).base_version, 1u);
+  const Bytes diff(t.seen.submits[1].begin(), t.seen.submits[1].end());
+  ASSERT_TRUE(t.publish(2, diff, {{5, t.sequence_of(1), 2}}));
+  EXPECT_EQ(t.author->stats().strokes_submitted, 2u);
+  EXPECT_EQ(t.author->stats().strokes_acknowledged, 2u);
+  EXPECT_TRUE(t.local.positions == t.author->base().positions);
+}
+
+// The same without the host's stroke: update() sends the submit again by itself, rebased, with
+// its one stroke (an idle host has nothing else that would carry it).
+TEST(SessionResend, AnUnmergedSubmitOfAnIdleHostGoesAgainFromUpdate) {
+  AuthorAndFakeMerger t;
+  ASSERT_TRUE(t.fake_merges_version_0());
+  ASSERT_TRUE(t.submit_edit(40));
+  ASSERT_TRUE(t.publish(1, edit_message(t.author->base(), 0, 100), {}));
+  ASSERT_TRUE(t.submits_reach(2));
+  EXPECT_EQ(t.seen.strokes[1], 1u);
+  EXPECT_EQ(peek_diff_header(t.seen.submits[1]).base_version, 1u);
+}
+
+// Strokes that change nothing beyond a submit still waiting for its version are present only
+// once that submit is: acknowledged with it, not at once ("acknowledged" means present).
+TEST(SessionResend, StrokesThatChangeNothingBeyondASubmitInFlightAreAcknowledgedWithIt) {
+  AuthorAndFakeMerger t;
+  ASSERT_TRUE(t.fake_merges_version_0());
+  ASSERT_TRUE(t.submit_edit(40));
+  EXPECT_FALSE(t.author->submit(t.local, 2));  // nothing new to send
+  EXPECT_EQ(t.author->stats().strokes_submitted, 3u);
+  EXPECT_EQ(t.author->stats().strokes_acknowledged, 0u);
+  const Bytes diff(t.seen.submits[0].begin(), t.seen.submits[0].end());
+  ASSERT_TRUE(t.publish(1, diff, {{5, t.sequence_of(0), 1}}));
+  EXPECT_EQ(t.author->stats().strokes_acknowledged, 3u);
 }
 
 }  // namespace

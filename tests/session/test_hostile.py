@@ -87,7 +87,8 @@ class Hostile(unittest.TestCase):
             self.assertIn("out of range", text, p.peer_id)  # version with a bad diff
             self.assertIn("does not match its connection", text, p.peer_id)  # merger's name
         # Nothing of the intruder's was merged: the merged strokes are exactly the members'.
-        self.assertEqual(summaries[0]["merged_strokes"], sum(s["strokes"] for s in summaries))
+        self.assertEqual(summaries[0]["merged_strokes"], sum(s["strokes"] for s in summaries),
+                         summaries)
         # Submits on an unknown base and versions of a stale or foreign epoch: ignored.
         self.assertGreater(summaries[0]["stale_ignored"], 0)
         for s in summaries:

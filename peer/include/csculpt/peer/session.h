@@ -227,7 +227,8 @@ class Session {
   /// replacing what was sent before for this base; `strokes` = strokes made since the last
   /// submit. The changed values of `local` are set to what the peers receive (within the wire
   /// tolerance). Returns false when there was nothing new to send: the strokes changed nothing
-  /// the session does not hold or was not sent already, and are counted acknowledged at once.
+  /// the session does not hold, and are counted acknowledged at once, or nothing beyond the
+  /// submit still waiting for its version, and are acknowledged with it.
   /// Never waits on the network.
   bool submit(Mesh& local, std::uint32_t strokes = 0);
   /// The same at the cost of the changed vertices instead of the whole mesh: `changed` lists the
@@ -250,7 +251,8 @@ class Session {
   /// local edits not yet inside a merged version are kept, edits already merged are not
   /// applied twice; the versions waiting together cost one rebase. A submitted edit that a
   /// version did not include (it reached the merger after the merge) is sent again, rebased,
-  /// at once. Returns the number of versions applied.
+  /// at once, unless the host edited since: its next submit then carries it with the new
+  /// strokes (counted). Returns the number of versions applied.
   std::size_t update(Mesh& local);
   /// The same at the cost of what changed instead of the whole mesh: `changed` lists the
   /// vertices the host changed since its last submit of either kind, as for submit(local,
