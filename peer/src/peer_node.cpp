@@ -80,6 +80,7 @@ void PeerNode::loop() {
       transport_.wait(next_deadline() - Clock::now());
       receive_all();
       finish_merge();
+      finish_load();
       if (!run_commands()) break;
       run_timers(Clock::now());
       publish_stats();
@@ -369,6 +370,7 @@ void PeerNode::on_presence(PeerId sender, const fb::Presence& p, Clock::time_poi
 
 void PeerNode::on_snapshot_chunk(const fb::SnapshotChunk& c) {
   if (!c.data()) return dropped("snapshot chunk without data");
+  if (snapshot_loader_.busy()) return;  // ours came: another is one asked for twice
   if (c.total() > options_.max_snapshot_bytes)
     return dropped("snapshot of " + std::to_string(c.total()) + " bytes exceeds the limit");
   // A snapshot older than our version is only wanted when we asked for it (divergence).
@@ -379,6 +381,17 @@ void PeerNode::on_snapshot_chunk(const fb::SnapshotChunk& c) {
   // it ignores, must not keep a stalled one from being given up (request_snapshot, heartbeat).
   if (snapshot_.version() == c.version()) last_snapshot_chunk_ = Clock::now();
   if (!complete) return;
+  if (!hierarchy_) {
+    // The joiner's first mesh: decoded, and its hierarchy built, off the network thread (a
+    // mesh of millions of faces takes seconds), while our heartbeats go on.
+    snapshot_loader_.start([bytes = snapshot_.take()] {
+      auto snap = std::make_shared<const Snapshot>(decode_snapshot(bytes));
+      auto hierarchy = std::make_shared<const Hierarchy>(Hierarchy::build(
+          static_cast<std::uint32_t>(snap->mesh.vertex_count()), snap->mesh.triangles));
+      return LoadedSnapshot{std::move(snap), std::move(hierarchy)};
+    });
+    return;
+  }
   auto snap = std::make_shared<const Snapshot>(decode_snapshot(snapshot_.take()));
   if (joined_ && snap->mesh.triangles != base_.triangles)
     return dropped("snapshot of another mesh connectivity");
@@ -387,7 +400,8 @@ void PeerNode::on_snapshot_chunk(const fb::SnapshotChunk& c) {
 
 /// The assembled snapshot becomes our version: the joiner's first, or a diverged peer's way
 /// back to the merger's history.
-void PeerNode::install_snapshot(std::shared_ptr<const Snapshot> snap) {
+void PeerNode::install_snapshot(std::shared_ptr<const Snapshot> snap,
+                                std::shared_ptr<const Hierarchy> hierarchy) {
   const std::optional<std::uint64_t> fork =
       joined_ ? replication_.fork_point(snap->chains) : std::nullopt;
   drop_merge();
@@ -397,7 +411,7 @@ void PeerNode::install_snapshot(std::shared_ptr<const Snapshot> snap) {
   if (merger_) merger_->clear();
   frame_ = snap->frame;
   host_.set_frame_and_attribution(snap->frame, snap->attribution);
-  if (!hierarchy_) build_merge_state();
+  if (!hierarchy_) build_merge_state(std::move(hierarchy));
   own_submit_.bytes.clear();
   journal_snapshot();
   HostItem item;
@@ -587,17 +601,7 @@ void PeerNode::broadcast(const Bytes& bytes) {
 }
 
 void PeerNode::heartbeat(Clock::time_point now) {
-  if (!joined_) {
-    // Still joining: greet the inviter again until the snapshot arrives (not so often that a
-    // large snapshot is sent twice while the first is on its way).
-    if (now >= next_join_hello_) {
-      next_join_hello_ = now + std::max(kSnapshotRetry, 4 * options_.membership.expired);
-      if (snapshot_flowing(now)) return;  // a large one on its way: not asked for twice
-      snapshot_.reset();                  // one that stopped coming is not finished
-      transport_.send(joining_endpoint_, hello(true));
-    }
-    return;
-  }
+  if (!joined_) return joining_heartbeat(now);
   expire(now);
   // A new socket would reuse our routing id while the old connection is still open on the
   // stalled peer's side, which its ROUTER refuses, and both sides would stay deaf to each other:
@@ -613,6 +617,19 @@ void PeerNode::heartbeat(Clock::time_point now) {
   elect();
   for (const Member* m : membership_.others()) send_heartbeat_to(m->endpoint);
   greet_lost(now);
+}
+
+/// Still joining: the members we know hear that we are alive (a large snapshot's transfer and
+/// load take longer than their expiry; taken for dead, we lost the socket the snapshot came
+/// on), and the inviter is greeted again until the snapshot arrives (not so often that a large
+/// one is sent twice while the first is on its way or loading).
+void PeerNode::joining_heartbeat(Clock::time_point now) {
+  for (const Member* m : membership_.others()) send_heartbeat_to(m->endpoint);
+  if (now < next_join_hello_ || snapshot_loader_.busy()) return;
+  next_join_hello_ = now + std::max(kSnapshotRetry, 4 * options_.membership.expired);
+  if (snapshot_flowing(now)) return;
+  snapshot_.reset();  // one that stopped coming is not finished
+  transport_.send(joining_endpoint_, hello(true));
 }
 
 void PeerNode::send_heartbeat_to(const std::string& endpoint) {
@@ -724,10 +741,22 @@ void PeerNode::finish_merge() {
   });
 }
 
-void PeerNode::build_merge_state() {
+void PeerNode::finish_load() {
+  std::optional<LoadedSnapshot> loaded;
+  try {
+    loaded = snapshot_loader_.take();
+  } catch (const InvalidInput& e) {
+    // A snapshot that fails its checks: asked for again at the next greeting.
+    return dropped(e.what());
+  }
+  if (loaded) install_snapshot(std::move(loaded->snap), std::move(loaded->hierarchy));
+}
+
+void PeerNode::build_merge_state(std::shared_ptr<const Hierarchy> hierarchy) {
   drop_merge();  // its merge uses the role replaced here
-  hierarchy_ = std::make_shared<const Hierarchy>(
-      Hierarchy::build(static_cast<std::uint32_t>(base_.vertex_count()), base_.triangles));
+  hierarchy_ = hierarchy ? std::move(hierarchy)
+                         : std::make_shared<const Hierarchy>(Hierarchy::build(
+                               static_cast<std::uint32_t>(base_.vertex_count()), base_.triangles));
   merger_.emplace(hierarchy_);
   host_.set_hierarchy(hierarchy_);
 }

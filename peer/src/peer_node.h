@@ -1,8 +1,9 @@
 // The network thread of one peer: PeerNode owns the transport, membership and election, the
 // replication state, the merger role and the snapshot assembly, and glues them together. It
-// sleeps in zmq_poll until a message, a host command (HostChannel + Transport::wake), a merge the
-// MergeWorker finished, or its next timer (heartbeat, merge). Its only link to the host thread
-// is the HostChannel; merges run on the worker's thread (merge_worker.h).
+// sleeps in zmq_poll until a message, a host command (HostChannel + Transport::wake), a
+// background merge or snapshot load finished, or its next timer (heartbeat, merge). Its only link
+// to the host thread is the HostChannel; merges and a joiner's snapshot load run on threads of
+// their own (background_task.h).
 #pragma once
 
 #include <cstdint>
@@ -14,6 +15,7 @@
 #include <utility>
 #include <vector>
 
+#include "background_task.h"
 #include "csculpt/hierarchy.h"
 #include "csculpt/merge.h"
 #include "csculpt/mesh.h"
@@ -21,7 +23,6 @@
 #include "csculpt/peer/session.h"
 #include "host_channel.h"
 #include "journal.h"
-#include "merge_worker.h"
 #include "merger_role.h"
 #include "messages.h"
 #include "peer_table.h"
@@ -97,7 +98,11 @@ class PeerNode {
   void on_snapshot_chunk(const fb::SnapshotChunk& c);
   void on_presence(PeerId sender, const fb::Presence& p, Clock::time_point now);
   void heard_timing(PeerId sender, const fb::Heartbeat& hb, Clock::time_point now);
-  void install_snapshot(std::shared_ptr<const Snapshot> snap);
+  /// `hierarchy`: the snapshot mesh's, built by the loader (a joiner), or null (we have one).
+  void install_snapshot(std::shared_ptr<const Snapshot> snap,
+                        std::shared_ptr<const Hierarchy> hierarchy = nullptr);
+  /// Installs the joiner's first snapshot once the loader decoded it and built its hierarchy.
+  void finish_load();
 
   // membership and election glue
   void member_joined(PeerId peer, const std::string& endpoint);
@@ -139,6 +144,7 @@ class PeerNode {
   void send_to_peer(PeerId peer, const Bytes& bytes);
   void broadcast(const Bytes& bytes);
   void heartbeat(Clock::time_point now);
+  void joining_heartbeat(Clock::time_point now);
   void send_heartbeat_to(const std::string& endpoint);
   Bytes hello(bool wants_snapshot) const;
   void send_own_submit();
@@ -153,7 +159,8 @@ class PeerNode {
   /// Before base_ changes other than by our own merge: waits for the merge in flight, if
   /// any, and forgets it.
   void drop_merge();
-  void build_merge_state();
+  /// The merge state for the mesh of base_: `hierarchy` if given, else built here.
+  void build_merge_state(std::shared_ptr<const Hierarchy> hierarchy = nullptr);
 
   // events and stats
   void event(EventKind kind, PeerId peer, std::string message = "");
@@ -211,9 +218,14 @@ class PeerNode {
   Clock::time_point next_snapshot_request_{};  // while one is awaited, not before this
   Clock::time_point last_snapshot_chunk_{};    // when the last chunk came
 
-  /// Declared after what its merges use (merger_, transport_'s wake-up), so it is joined
-  /// before they go.
-  MergeWorker merge_worker_{[this] { transport_.wake(); }};
+  /// Declared after what their tasks use (merger_, transport_'s wake-up), so they are joined
+  /// before those go.
+  BackgroundTask<MergeOutcome> merge_worker_{[this] { transport_.wake(); }};
+  struct LoadedSnapshot {
+    std::shared_ptr<const Snapshot> snap;
+    std::shared_ptr<const Hierarchy> hierarchy;
+  };
+  BackgroundTask<LoadedSnapshot> snapshot_loader_{[this] { transport_.wake(); }};
 
   std::vector<std::uint64_t> inbound_;  // aligned copy of a misaligned message
   std::thread thread_;

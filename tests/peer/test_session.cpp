@@ -356,4 +356,32 @@ TEST(Session, AMergeLongerThanTheExpiryLeavesEveryoneAMember) {
   }
 }
 
+// A joiner of a large mesh is silent for longer than the others' expiry unless it says it is
+// alive: the snapshot's transfer (seconds over a slow link), its decoding and the hierarchy
+// it builds. Taken for dead, it was dropped and its snapshot's socket closed mid-transfer. The
+// expiry here is half the time the joiner's hierarchy takes to build, timed here (sanitizers
+// slow both alike): the joiner beats through the transfer and builds off the network thread,
+// and the creator never sees it leave.
+TEST(Session, AJoinLongerThanTheExpiryLeavesTheJoinerAMember) {
+  const Mesh sphere = make_sphere(1000000);
+  const auto t0 = Clock::now();
+  const Hierarchy h = Hierarchy::build(sphere);  // what the joiner builds
+  const auto build_time = std::chrono::duration_cast<Millis>(Clock::now() - t0);
+  const Millis expired = std::max(Millis{150}, build_time / 2);
+  auto options = [&](PeerId id) {
+    SessionOptions o = fast_options(id);
+    o.membership = {expired / 8, expired / 2, expired};
+    return o;
+  };
+  auto a = Session::create(sphere, options(1));
+  auto b = Session::join(a->invite(), options(2), Millis{120000});
+  ASSERT_TRUE(wait_until([&] { return a->peers().size() == 1 && b->peers().size() == 1; }));
+  std::this_thread::sleep_for(2 * expired);
+  ASSERT_GT(build_time, expired) << "building the hierarchy was not longer than the expiry";
+  for (const Event& e : a->poll_events())
+    EXPECT_NE(e.kind, EventKind::peer_left) << "the creator expired peer " << e.peer;
+  EXPECT_EQ(a->peers().size(), 1u);
+  EXPECT_EQ(b->version(), a->version());
+}
+
 }  // namespace
