@@ -1,5 +1,5 @@
 # Builds merge cases from edits authored by Blender's own deformers.
-# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|house|extra|crumple|probe4|probe5|probe6|probe7]
+# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|house|extra|crumple|probe4|probe5|probe6|probe7|probe8]
 # (Debian 12: apt-get install blender assimp-testmodels). Add your own case() lines to author more.
 # public, public2: the sets of shared/eval/cases (this file began as shared/eval/make_cases.py);
 # held: tests/eval/cases (see its README.md), which also prints what each case holds;
@@ -775,6 +775,40 @@ elif which == "probe7":
          [lambda o: local_twist(o, *LM["+x"], 0.2, math.radians(60)),
           lambda o: tiny_grab(o, at("-x"), (0, 0.03, 0.02), 0.2),
           lambda o: bend(o, math.radians(60), 'Z')], "stack", details=[0, 1])
+elif which == "probe8":
+    # pairings of meshes and deformers no earlier set paired (a Lattice on the duck, a Wave on
+    # the figure, a Smooth over the boxes, a strong Cast on the open sphere, a Hook on the
+    # engine), strong, weak and sideways details, four artists on the scan; scored by hand
+    case("lattice_plus_detail_duck", "duck",
+         [lambda o: detail(o, at("+z"), 0.3, 0.04, 130),
+          lambda o: lattice(o, {(1, 0, 2): (0, -0.2, 0.2), (2, 1, 1): (0.2, 0, 0.1), (0, 2, 0): (-0.1, 0.1, -0.2)})],
+         "stack", details=[0])
+    case("wave_plus_swirl_human", "human",
+         [lambda o: local_twist(o, *LM["+z"], 0.25, math.radians(50)),
+          lambda o: wave(o, 0.08, 0.5)], "stack", details=[0])
+    case("smooth_plus_detail_cubes", "cubes",
+         [lambda o: detail(o, at("+x"), 0.35, 0.04, 131),
+          lambda o: smooth(o, at("+x"), 0.8, 1.0, 20)], "stack", details=[0])
+    case("cast_plus_strong_detail_sphere_hole", "sphere_hole",
+         [lambda o: detail(o, at("+x"), 0.35, 0.09, 132),
+          lambda o: cast(o, 0.6)], "stack", details=[0])
+    case("hook_plus_detail_engine_shipped", "engine_shipped",
+         [lambda o: detail_along(o, at("+y"), 0.3, 0.04, 133, 'Y'),
+          lambda o: hook(o, at("+y"), (0.05, 0.12, 0.05), 0.5)], "stack", details=[0])
+    case("twist_plus_weak_detail_duck_shipped", "duck_shipped",
+         [lambda o: detail_along(o, at("+y"), 0.3, 0.012, 134, 'Y'),
+          lambda o: twist(o, math.radians(50), 'Z')], "stack", details=[0])
+    case("disjoint_cubes", "cubes",
+         [lambda o: detail(o, at("+x"), 0.3, 0.04, 135),
+          lambda o: grab(o, at("-x"), at("-x", 1, (-0.1, 0.05, 0.1)), 0.35)], "stack", details=[0])
+    case("four_artists_wuson", "wuson",
+         [lambda o: detail(o, at("+y"), 0.25, 0.04, 136),
+          lambda o: pinch(o, at("-y"), 0.2, 0.6),
+          lambda o: tiny_grab(o, at("+x"), (0, 0.03, 0.02), 0.2),
+          lambda o: simple(o, 'BEND', math.radians(50), 'Z')], "stack", details=[0, 1, 2])
+    case("taper_plus_swirl_mocap", "mocap",
+         [lambda o: local_twist(o, *LM["+x"], 0.25, math.radians(60)),
+          lambda o: simple(o, 'TAPER', 0.6, 'Z')], "stack", details=[0])
 elif which == "house":
     house_grab_case()
     case("cast_plus_detail_house", "house",
