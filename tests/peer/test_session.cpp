@@ -24,6 +24,7 @@ using namespace csculpt;
 using namespace csculpt::peer;
 using namespace std::chrono_literals;
 using csculpt::peer::testing::fast_options;
+using csculpt::peer::testing::two_artists_edits;
 using csculpt::peer::testing::wait_until;
 
 struct Artist {
@@ -302,13 +303,7 @@ TEST(Session, LateJoinerGetsTheCurrentVersionAndMergerFailoverKeepsEdits) {
 // expires it, and the session converges on one merger.
 TEST(Session, AMergeLongerThanTheExpiryLeavesEveryoneAMember) {
   const Mesh sphere = make_sphere(320000);
-  const auto t_build = Clock::now();
-  const Hierarchy h = Hierarchy::build(sphere);  // what each joiner builds
-  const auto build_time = std::chrono::duration_cast<Millis>(Clock::now() - t_build);
-  std::vector<Mesh> edits(2, sphere);
-  for (std::size_t k = 0; k < edits.size(); ++k)
-    for (const Stroke& s : scripted_strokes(sphere, 17 + k, 256, /*paint=*/false))
-      apply_stroke(edits[k], s, &h.topology());
+  const auto [h, build_time, edits] = two_artists_edits(sphere, 17, 256);
   const std::vector<Diff> diffs = {capture_diff(sphere, edits[0]), capture_diff(sphere, edits[1])};
   Merger merger(h);
   const auto t0 = Clock::now();

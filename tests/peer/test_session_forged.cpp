@@ -11,9 +11,6 @@
 #include <thread>
 #include <vector>
 
-#include "csculpt/diff.h"
-#include "csculpt/hierarchy.h"
-#include "csculpt/merge.h"
 #include "csculpt/peer/session.h"
 #include "csculpt/testkit/generate.h"
 #include "fake_peer.h"
@@ -39,13 +36,7 @@ struct MergerState {
 
 TEST(SessionForged, AForgedVersionDuringAMergeCostsTheMergerNoSubmit) {
   const Mesh sphere = make_sphere(80000);
-  const auto t_build = Clock::now();
-  const Hierarchy h = Hierarchy::build(sphere);  // what the joiner builds
-  const auto build_time = std::chrono::duration_cast<Millis>(Clock::now() - t_build);
-  std::vector<Mesh> edits(2, sphere);
-  for (std::size_t k = 0; k < edits.size(); ++k)
-    for (const Stroke& s : scripted_strokes(sphere, 31 + k, 128, /*paint=*/false))
-      apply_stroke(edits[k], s, &h.topology());
+  const auto [hierarchy, build_time, edits] = two_artists_edits(sphere, 31, 128);
   auto options = [&](PeerId id) {
     SessionOptions o = fast_options(id);
     // The first merge comes one interval after the start, after the join and both submits:
