@@ -8,6 +8,15 @@
 #include "invite.h"
 
 namespace csculpt::peer {
+namespace {
+
+/// The hierarchy of `mesh`'s connectivity: what every peer builds for itself.
+std::shared_ptr<const Hierarchy> hierarchy_of(const Mesh& mesh) {
+  return std::make_shared<const Hierarchy>(
+      Hierarchy::build(static_cast<std::uint32_t>(mesh.vertex_count()), mesh.triangles));
+}
+
+}  // namespace
 
 PeerNode::PeerNode(const Invite& invite, bool creator, const SessionOptions& options)
     : options_(options),
@@ -386,8 +395,7 @@ void PeerNode::on_snapshot_chunk(const fb::SnapshotChunk& c) {
     // mesh of millions of faces takes seconds), while our heartbeats go on.
     snapshot_loader_.start([bytes = snapshot_.take()] {
       auto snap = std::make_shared<const Snapshot>(decode_snapshot(bytes));
-      auto hierarchy = std::make_shared<const Hierarchy>(Hierarchy::build(
-          static_cast<std::uint32_t>(snap->mesh.vertex_count()), snap->mesh.triangles));
+      auto hierarchy = hierarchy_of(snap->mesh);
       return LoadedSnapshot{std::move(snap), std::move(hierarchy)};
     });
     return;
@@ -754,9 +762,7 @@ void PeerNode::finish_load() {
 
 void PeerNode::build_merge_state(std::shared_ptr<const Hierarchy> hierarchy) {
   drop_merge();  // its merge uses the role replaced here
-  hierarchy_ = hierarchy ? std::move(hierarchy)
-                         : std::make_shared<const Hierarchy>(Hierarchy::build(
-                               static_cast<std::uint32_t>(base_.vertex_count()), base_.triangles));
+  hierarchy_ = hierarchy ? std::move(hierarchy) : hierarchy_of(base_);
   merger_.emplace(hierarchy_);
   host_.set_hierarchy(hierarchy_);
 }
