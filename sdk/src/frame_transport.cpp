@@ -78,7 +78,7 @@ class Transport {
   bool may_carry(const VertexState& s) const;
   void load_turns(std::size_t at, VertexState& s) const;
   void load_displacements(std::size_t at, VertexState& s) const;
-  double ring_stretch(std::size_t at, std::size_t i) const;
+  double ring_stretch(std::size_t at, std::size_t i, const Vec3d& n) const;
   std::size_t sole_mover(std::size_t at) const;
   Vec3f lone_edit(std::size_t at, std::size_t i) const;
   Vec3f transported(std::size_t at, const VertexState& s) const;
@@ -407,9 +407,10 @@ void Transport::chunk_energy(std::size_t begin, std::size_t end, double* energy)
     if (!scratch_.carried_here[at]) continue;  // its energy terms are zero, its levels unread
     load_displacements(at, s);
     plan_levels(at, s);
+    const Vec3d n = normal(at);
     for (std::size_t i = 0; i < n_; ++i) {
       if (!s.turns[i] && !s.moves[i]) continue;
-      const double k = ring_stretch(at, i);
+      const double k = ring_stretch(at, i, n);
       for (std::size_t j = 0; j < n_; ++j)
         if (j != i && s.moves[j])
           energy[i * n_ + j] += norm2(rotation_change(s.rotation[i], s.d[j])) + k * norm2(s.d[j]);
@@ -417,24 +418,44 @@ void Transport::chunk_energy(std::size_t begin, std::size_t end, double* energy)
   }
 }
 
-/// How much diff i stretches the one ring of the listed vertex `at`: twice the mean squared
-/// relative change of its edges' lengths (a stretch by s along one direction gives about
-/// (s - 1)^2, its share of |F - I|^2 for F the deformation gradient). A detail that moves the
-/// surface sideways (a pinch, a small grab) hardly turns it but squeezes and shears it; by its
-/// turn alone it passed for the coarser edit under a Cast, a taper or a twist.
-double Transport::ring_stretch(std::size_t at, std::size_t i) const {
+/// The share of displacement d that lies in the tangent plane of unit normal n, in [0, 1]; a
+/// vertex that hardly moves counts as sideways (a pinch's centre stays put while its ring
+/// closes in), continuously, on the scale of its edges' length `edge`.
+double sideways(const Vec3d& d, const Vec3d& n, double edge) {
+  const double along = dot(d, n);
+  const double all = norm2(d) + 1e-4 * edge * edge;
+  return (all - along * along) / all;
+}
+
+/// How much diff i stretches the one ring of the listed vertex `at` (base normal n): twice the mean
+/// squared relative change of its edges' lengths (a stretch by s along one direction gives about (s
+/// - 1)^2, its share of |F - I|^2 for F the deformation gradient). A detail that moves the surface
+/// sideways (a pinch, a small grab) hardly turns it but squeezes and shears it; by its turn alone
+/// it passed for the coarser edit under a Cast, a taper or a twist.
+///
+/// The ring's even change (its mean) counts only as far as the vertex moves sideways: a lift
+/// h along the normals of a surface of radius r grows every ring by h / r, the curvature's
+/// doing and not a fine edit (a Wave over a head read finer than a swirl in it and was carried
+/// by it). A lift's fineness is in its slope, which its turns measure. A pinch, which moves
+/// the vertex sideways, keeps its even squeeze. A rigid motion changes no length, so whatever
+/// its direction it adds nothing.
+double Transport::ring_stretch(std::size_t at, std::size_t i, const Vec3d& n) const {
   const std::uint32_t v = vertices_[at];
   const Vec3d b = widen(base_[v]), e = edited_position(i, v);
-  double sum = 0;
+  double sum = 0, squares = 0;
   std::size_t edges = 0;
   for (const std::uint32_t u : topology_.vertex_vertices.row(v)) {
     const double before = length(sub(widen(base_[u]), b));
     if (!(before > 0)) continue;  // a collapsed edge says nothing
     const double change = length(sub(edited_position(i, u), e)) / before - 1;
-    sum += change * change;
+    sum += change;
+    squares += change * change;
     ++edges;
   }
-  return edges ? 2 * sum / static_cast<double>(edges) : 0.0;
+  if (edges == 0) return 0.0;
+  const double mean = sum / static_cast<double>(edges);
+  const double uneven = std::max(0.0, squares / static_cast<double>(edges) - mean * mean);
+  return 2 * (uneven + sideways(sub(e, b), n, scratch_.edge[at]) * mean * mean);
 }
 
 void Transport::finish_weights(std::size_t chunks) {
