@@ -407,7 +407,7 @@ void Transport::chunk_energy(std::size_t begin, std::size_t end, double* energy)
     if (!scratch_.carried_here[at]) continue;  // its energy terms are zero, its levels unread
     load_displacements(at, s);
     plan_levels(at, s);
-    const Vec3d n = normal(at);
+    const Vec3d n = scratch_.normal[at] = normal(at);
     for (std::size_t i = 0; i < n_; ++i) {
       if (!s.turns[i] && !s.moves[i]) continue;
       const double k = ring_stretch(at, i, n);
@@ -537,8 +537,7 @@ Vec3f Transport::lone_edit(std::size_t at, std::size_t i) const {
 
 /// The formula (frame_transport.h) at the listed vertex `at`, its state loaded in `s`.
 Vec3f Transport::transported(std::size_t at, const VertexState& s) const {
-  Vec3d sum{}, n{};
-  bool have_normal = false;              // computed only where one edit carries another
+  Vec3d sum{};
   std::array<double, kMaxUsers> agrees;  // per carrier, once it carries anything here
   std::fill_n(agrees.begin(), n_, -1.0);
   for (std::size_t j = 0; j < n_; ++j) {
@@ -555,10 +554,9 @@ Vec3f Transport::transported(std::size_t at, const VertexState& s) const {
       if (agrees[i] < 0) agrees[i] = agreement(at, i);
       g *= agrees[i];
       if (!(g > 0)) continue;
-      if (!have_normal) n = normal(at), have_normal = true;
       if (level < 0) level = carrying_level(s.size[j], scratch_.edge[at]);
       const Quat frame = carrier(at, i, level);
-      carried = add(carried, scale(rotation_change(swing(frame, n), carried), g));
+      carried = add(carried, scale(rotation_change(swing(frame, scratch_.normal[at]), carried), g));
     }
     sum = add(sum, count == 1 ? carried : scale(carried, 1.0 / count));
   }
@@ -581,6 +579,7 @@ void transport_positions(
   const std::size_t chunks = std::max<std::size_t>(1, (vertices.size() + grain - 1) / grain);
   scratch.chunk_energy.resize(chunks * n * n);
   scratch.edge.resize(vertices.size());
+  scratch.normal.resize(vertices.size());
   scratch.carried_here.resize(vertices.size());
   scratch.sole.resize(vertices.size());
   if (scratch.reads_level.size() < base.size()) scratch.reads_level.resize(base.size(), 0);

@@ -92,6 +92,7 @@ struct TransportScratch {
   std::vector<Vec3d> seam_normal;      ///< per seam group: the sum of its members' normals
   std::vector<double> seam_agreement;  ///< per seam group and diff: the least agreement
   std::vector<double> edge;            ///< per listed vertex: its mean edge length
+  std::vector<Vec3d> normal;           ///< per listed vertex where carried_here: its base normal
   /// Per listed vertex: 1 where some diff turns the surface under another's displacement.
   std::vector<std::uint8_t> carried_here;
   /// Per listed vertex: the diff whose edited position the merge gave it exactly, or
