@@ -1,5 +1,5 @@
 # Builds merge cases from edits authored by Blender's own deformers.
-# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|house|extra|crumple|probe4|probe5|probe6|probe7|probe8]
+# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|house|extra|crumple|probe4|probe5|probe6|probe7|probe8|probe9]
 # (Debian 12: apt-get install blender assimp-testmodels). Add your own case() lines to author more.
 # public, public2: the sets of shared/eval/cases (this file began as shared/eval/make_cases.py);
 # held: tests/eval/cases (see its README.md), which also prints what each case holds;
@@ -812,6 +812,40 @@ elif which == "probe8":
     case("taper_plus_swirl_mocap", "mocap",
          [lambda o: local_twist(o, *LM["+x"], 0.25, math.radians(60)),
           lambda o: simple(o, 'TAPER', 0.6, 'Z')], "stack", details=[0])
+elif which == "probe9":
+    # sideways and normal details under lifts along the normals (a Wave, broad bumps, a
+    # regional Cast, a Shrinkwrap) and under a Lattice, on many-part and single meshes, four
+    # artists mixing both kinds; scored by hand, not kept
+    case("wave_plus_pinch_monkey", "monkey2",
+         [lambda o: pinch(o, at("+z"), 0.25, 0.6),
+          lambda o: wave(o, 0.1, 0.5)], "stack", details=[0])
+    case("bumps_plus_swirl_torus", "torus_lo",
+         [lambda o: local_twist(o, (1.3, 0, 0), (1, 0, 0), 0.3, math.radians(60)),
+          lambda o: bumps(o, 1.0, 0.25, 140)], "stack", details=[0])
+    case("cast_plus_tinygrab_wuson", "wuson",
+         [lambda o: tiny_grab(o, at("+y"), (0.03, 0, 0.02), 0.2),
+          lambda o: cast(o, 0.4)], "stack", details=[0])
+    case("shrinkwrap_plus_pinch_monkey", "monkey2",
+         [lambda o: pinch(o, near(o, (0.35, -0.75, 0.45))[0], 0.2, 0.6),
+          lambda o: shrinkwrap_part(o, (0, -0.6, 0.3), 0.9, 0.9)], "stack", details=[0])
+    case("wave_plus_detail_cubes", "cubes",
+         [lambda o: detail(o, at("+x"), 0.3, 0.04, 141),
+          lambda o: wave(o, 0.1, 0.8)], "stack", details=[0])
+    case("lattice_plus_tinygrab_mocap", "mocap",
+         [lambda o: tiny_grab(o, at("+x"), (0, 0.03, 0.02), 0.2),
+          lambda o: lattice(o, {(2, 1, 1): (0.15, 0, 0.1), (1, 1, 2): (0, 0.1, 0.15), (0, 0, 0): (-0.1, -0.1, 0)})],
+         "stack", details=[0])
+    case("cast_part_plus_swirl_human", "human",
+         [lambda o: local_twist(o, *LM["+z"], 0.2, math.radians(60)),
+          lambda o: cast_part(o, 0.8, at("+z"), 0.6)], "stack", details=[0])
+    case("four_artists_human", "human",
+         [lambda o: detail(o, at("+x"), 0.2, 0.02, 142),
+          lambda o: pinch(o, at("-x"), 0.2, 0.6),
+          lambda o: local_twist(o, *LM["+z"], 0.2, math.radians(40)),
+          lambda o: wave(o, 0.06, 0.5)], "stack", details=[0, 1, 2])
+    case("disjoint_pinch_grab_torus", "torus_lo",
+         [lambda o: pinch(o, (1, 0, 0.3), 0.25, 0.6),
+          lambda o: grab(o, (-1, 0, 0.3), (-1.2, 0.1, 0.4), 0.4)], "stack", details=[0])
 elif which == "house":
     house_grab_case()
     case("cast_plus_detail_house", "house",
