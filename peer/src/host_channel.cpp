@@ -95,9 +95,12 @@ void HostChannel::set_frame_and_attribution(const MergeFrame& frame,
   attribution_ = std::move(attribution);
 }
 
-Bytes HostChannel::encode_snapshot_of(const Mesh& mesh, const ChainHistory& chains) const {
+Snapshot HostChannel::snapshot_of(const Mesh& mesh, const ChainHistory& chains) const {
+  Snapshot snap{mesh, {}, {}, chains};
   std::lock_guard lock(mutex_);
-  return encode_snapshot(mesh, frame_, attribution_, chains);
+  snap.frame = frame_;
+  snap.attribution = attribution_;
+  return snap;
 }
 
 void HostChannel::set_hierarchy(std::shared_ptr<const Hierarchy> hierarchy) {

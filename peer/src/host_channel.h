@@ -103,8 +103,9 @@ class HostChannel {
   /// A snapshot's merge frame and attribution, replacing ours.
   void set_frame_and_attribution(const MergeFrame& frame,
                                  std::map<PeerId, std::vector<float>> attribution);
-  /// The bytes of a snapshot of `mesh` with our frame and attribution, and `chains`.
-  Bytes encode_snapshot_of(const Mesh& mesh, const ChainHistory& chains) const;
+  /// A snapshot of `mesh` with our frame and attribution, and `chains`: copies, so that it is
+  /// encoded without holding the host's lock, or beside the network thread.
+  Snapshot snapshot_of(const Mesh& mesh, const ChainHistory& chains) const;
 
   void set_hierarchy(std::shared_ptr<const Hierarchy> hierarchy);
   std::shared_ptr<const Hierarchy> hierarchy() const;

@@ -256,6 +256,16 @@ Bytes with_magic(const char* magic, std::initializer_list<Bytes> records) {
   return out;
 }
 
+/// Writes a snapshot file at `path` (synced, not yet renamed into place).
+void write_snapshot_file(const std::string& path, std::span<const std::uint8_t> snapshot,
+                         std::uint64_t version, std::uint64_t chain) {
+  Bytes payload = head_payload(version, chain);
+  put_bytes(payload, snapshot);
+  write_synced(path, with_magic(kSnapshotMagic, {frame(kSnapshotRecord, payload)}));
+}
+
+constexpr char kCompactionSnapshot[] = "snapshot.next";
+
 /// Whether `file` is a log whose head names the snapshot at `version` with `chain`.
 bool log_follows(const Bytes& file, std::uint64_t version, std::uint64_t chain) {
   if (file.size() < kMagicBytes || std::memcmp(file.data(), kLogMagic, kMagicBytes) != 0)
@@ -376,7 +386,8 @@ Journal::Journal(Journal&& o) noexcept
       log_bytes_(o.log_bytes_),
       log_versions_(o.log_versions_),
       own_(std::move(o.own_)),
-      members_(std::move(o.members_)) {}
+      members_(std::move(o.members_)),
+      compaction_(std::move(o.compaction_)) {}
 
 Journal& Journal::operator=(Journal&& o) noexcept {
   if (this != &o) {
@@ -389,6 +400,7 @@ Journal& Journal::operator=(Journal&& o) noexcept {
     log_versions_ = o.log_versions_;
     own_ = std::move(o.own_);
     members_ = std::move(o.members_);
+    compaction_ = std::move(o.compaction_);
   }
   return *this;
 }
@@ -439,25 +451,62 @@ void Journal::open_log(std::uint64_t truncate_at) {
 
 void Journal::reset(std::span<const std::uint8_t> snapshot, std::uint64_t version,
                     std::uint64_t chain) {
-  Bytes snap_payload = head_payload(version, chain);
-  put_bytes(snap_payload, snapshot);
+  compaction_.reset();  // its snapshot would be older than this one, or of another branch
+  const std::string path = file_in(dir_, "snapshot") + ".tmp";
+  write_snapshot_file(path, snapshot, version, chain);
+  install(path, version, chain, {}, version);
+}
+
+void write_compaction_snapshot(const std::string& dir, std::span<const std::uint8_t> snapshot,
+                               std::uint64_t version, std::uint64_t chain) {
+  write_snapshot_file(file_in(dir, kCompactionSnapshot), snapshot, version, chain);
+}
+
+void discard_compaction_snapshot(const std::string& dir) {
+  std::error_code ec;
+  fs::remove(file_in(dir, kCompactionSnapshot), ec);  // a leftover is ignored by load anyway
+}
+
+void Journal::adopt_snapshot(std::uint64_t version, std::uint64_t chain) {
+  compaction_.reset();
+  install(file_in(dir_, kCompactionSnapshot), version, chain, {}, version);
+}
+
+void Journal::begin_compaction(std::uint64_t version, std::uint64_t chain) {
+  compaction_ = Compaction{version, chain, {}, version};
+}
+
+std::optional<std::uint64_t> Journal::compacting() const {
+  return compaction_ ? std::optional(compaction_->version) : std::nullopt;
+}
+
+void Journal::finish_compaction() {
+  if (!compaction_) return;
+  const Compaction c = std::move(*compaction_);
+  compaction_.reset();
+  install(file_in(dir_, kCompactionSnapshot), c.version, c.chain, c.versions, c.last_version);
+}
+
+/// Renames the synced snapshot at `snapshot_path` into place with a new log after it: its head,
+/// `versions` (framed records after the snapshot, up to `last_version`), the own edit if based
+/// on one of those versions (an older one is stale: the host rebases and submits it again;
+/// another branch's is not ours to keep) and the members.
+void Journal::install(const std::string& snapshot_path, std::uint64_t version, std::uint64_t chain,
+                      std::span<const Bytes> versions, std::uint64_t last_version) {
   const std::string snap_path = file_in(dir_, "snapshot"), log_path = file_in(dir_, "log");
-  write_synced(snap_path + ".tmp",
-               with_magic(kSnapshotMagic, {frame(kSnapshotRecord, snap_payload)}));
   Bytes log = with_magic(kLogMagic, {frame(kLogHeadRecord, head_payload(version, chain))});
-  // An edit from another version is stale (the host rebases and submits it again) or of another
-  // branch: only one from this version is carried over.
-  if (own_ && own_->base_version != version) own_.reset();
+  for (const Bytes& r : versions) put_bytes(log, r);
+  if (own_ && (own_->base_version < version || own_->base_version > last_version)) own_.reset();
   if (own_) put_bytes(log, frame(kOwnRecord, own_payload(*own_)));
   for (const auto& [peer, endpoint] : members_)
     put_bytes(log, frame(kMemberRecord, member_payload(peer, endpoint)));
   write_synced(log_path + ".tmp", log);
   // The snapshot first: until the log is renamed too, load_journal takes log.tmp.
-  rename_file(snap_path + ".tmp", snap_path);
+  rename_file(snapshot_path, snap_path);
   rename_file(log_path + ".tmp", log_path);
   sync_dir(dir_);
   has_snapshot_ = true;
-  log_versions_ = 0;
+  log_versions_ = versions.size();
   open_log(log.size());
 }
 
@@ -468,11 +517,13 @@ void Journal::append(std::uint32_t type, std::span<const std::uint8_t> payload) 
   write_all(log_fd_, record, path);
   sync_fd(log_fd_, path);
   log_bytes_ += record.size();
+  if (compaction_ && type == kVersionRecord) compaction_->versions.push_back(record);
 }
 
 void Journal::append_version(const VersionRecord& r) {
   append(kVersionRecord, version_message({}, r, false));
   ++log_versions_;
+  if (compaction_) compaction_->last_version = r.version;
 }
 
 void Journal::append_own(const OwnEdit& own) {
@@ -488,7 +539,8 @@ void Journal::append_member(PeerId peer, const std::string& endpoint) {
 }
 
 bool Journal::wants_compaction() const {
-  return log_bytes_ > limits_.max_log_bytes || log_versions_ >= limits_.max_log_versions;
+  return !compaction_ &&
+         (log_bytes_ > limits_.max_log_bytes || log_versions_ >= limits_.max_log_versions);
 }
 
 }  // namespace csculpt::peer

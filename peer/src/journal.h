@@ -51,6 +51,14 @@ struct JournalState {
 /// A bad record in the log ends it there (dropped_bytes, dropped_reason).
 JournalState load_journal(const std::string& dir);
 
+/// Writes the snapshot of a compaction under way (Journal::begin_compaction) to `dir`, synced,
+/// under a name of its own: it touches nothing the journal writes, so it runs beside the
+/// network thread while that goes on appending. Throws IoError.
+void write_compaction_snapshot(const std::string& dir, std::span<const std::uint8_t> snapshot,
+                               std::uint64_t version, std::uint64_t chain);
+/// Removes what write_compaction_snapshot wrote for a compaction given up (reset() came first).
+void discard_compaction_snapshot(const std::string& dir);
+
 struct JournalLimits {
   /// The log is compacted into a new snapshot past either bound.
   std::uint64_t max_log_bytes = std::uint64_t{64} << 20;
@@ -79,8 +87,26 @@ class Journal {
   void append_version(const VersionRecord& r);
   void append_own(const OwnEdit& own);
   void append_member(PeerId peer, const std::string& endpoint);
-  /// Whether the log is past a bound (then reset() with a snapshot of the current version).
+  /// Whether the log is past a bound and no compaction is under way (then begin_compaction,
+  /// or reset() with a snapshot of the current version).
   bool wants_compaction() const;
+  /// A compaction whose snapshot, of `version` (the last appended), is written beside the
+  /// network thread by write_compaction_snapshot: at 320K faces a snapshot took ~370 ms to
+  /// encode and sync, at millions of faces seconds, and a network thread that long silent is
+  /// taken for gone. The log goes on as before meanwhile; the versions appended are also kept
+  /// for the new log. reset() gives the compaction up.
+  void begin_compaction(std::uint64_t version, std::uint64_t chain);
+  /// The version of the compaction under way, if any.
+  std::optional<std::uint64_t> compacting() const;
+  /// Once write_compaction_snapshot returned: the new log (its head, the versions appended
+  /// since, the own edit if based on one of them, the members) written and synced, then both
+  /// renamed into place as reset() does.
+  void finish_compaction();
+  /// The snapshot write_compaction_snapshot wrote of `version` put into place at once, with a
+  /// fresh log after it (a joiner's first snapshot, written as it arrived, off the network
+  /// thread). Gives up a compaction under way.
+  void adopt_snapshot(std::uint64_t version, std::uint64_t chain);
+  const std::string& dir() const { return dir_; }
   /// Whether a snapshot was written (before it, there is nothing to resume).
   bool has_snapshot() const { return has_snapshot_; }
   std::uint64_t log_bytes() const { return log_bytes_; }
@@ -89,6 +115,14 @@ class Journal {
   Journal(std::string dir, JournalLimits limits);
   void append(std::uint32_t type, std::span<const std::uint8_t> payload);
   void open_log(std::uint64_t truncate_at);
+  void install(const std::string& snapshot_path, std::uint64_t version, std::uint64_t chain,
+               std::span<const Bytes> versions, std::uint64_t last_version);
+
+  struct Compaction {
+    std::uint64_t version = 0, chain = 0;
+    std::vector<Bytes> versions;  ///< framed version records appended since
+    std::uint64_t last_version = 0;
+  };
 
   std::string dir_;
   JournalLimits limits_;
@@ -97,6 +131,7 @@ class Journal {
   std::uint64_t log_bytes_ = 0, log_versions_ = 0;
   std::optional<OwnEdit> own_;  // carried over into the log after a new snapshot
   std::map<PeerId, std::string> members_;
+  std::optional<Compaction> compaction_;
 };
 
 }  // namespace csculpt::peer

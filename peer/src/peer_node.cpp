@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <optional>
+#include <utility>
 
 #include "attribution.h"
 #include "csculpt/error.h"
@@ -90,6 +92,8 @@ void PeerNode::loop() {
       receive_all();
       finish_merge();
       finish_load();
+      finish_snapshot_answer();
+      finish_compaction();
       if (!run_commands()) break;
       run_timers(Clock::now());
       publish_stats();
@@ -391,12 +395,23 @@ void PeerNode::on_snapshot_chunk(const fb::SnapshotChunk& c) {
   if (snapshot_.version() == c.version()) last_snapshot_chunk_ = Clock::now();
   if (!complete) return;
   if (!hierarchy_) {
-    // The joiner's first mesh: decoded, and its hierarchy built, off the network thread (a
-    // mesh of millions of faces takes seconds), while our heartbeats go on.
-    snapshot_loader_.start([bytes = snapshot_.take()] {
-      auto snap = std::make_shared<const Snapshot>(decode_snapshot(bytes));
-      auto hierarchy = hierarchy_of(snap->mesh);
-      return LoadedSnapshot{std::move(snap), std::move(hierarchy)};
+    // The joiner's first mesh: decoded, its hierarchy built and its journal snapshot written,
+    // off the network thread (a mesh of millions of faces takes seconds), while our heartbeats
+    // go on.
+    snapshot_loader_.start([bytes = snapshot_.take(), version = snapshot_.version(),
+                            chain = snapshot_.chain(),
+                            dir = journal_ ? journal_->dir() : std::string()] {
+      LoadedSnapshot loaded{
+          std::make_shared<const Snapshot>(decode_snapshot(bytes)), {}, false, {}};
+      loaded.hierarchy = hierarchy_of(loaded.snap->mesh);
+      if (dir.empty()) return loaded;
+      try {
+        write_compaction_snapshot(dir, bytes, version, chain);
+        loaded.journaled = true;
+      } catch (const std::exception& e) {
+        loaded.journal_error = e.what();
+      }
+      return loaded;
     });
     return;
   }
@@ -409,7 +424,7 @@ void PeerNode::on_snapshot_chunk(const fb::SnapshotChunk& c) {
 /// The assembled snapshot becomes our version: the joiner's first, or a diverged peer's way
 /// back to the merger's history.
 void PeerNode::install_snapshot(std::shared_ptr<const Snapshot> snap,
-                                std::shared_ptr<const Hierarchy> hierarchy) {
+                                std::shared_ptr<const Hierarchy> hierarchy, bool journaled) {
   const std::optional<std::uint64_t> fork =
       joined_ ? replication_.fork_point(snap->chains) : std::nullopt;
   drop_merge();
@@ -421,7 +436,10 @@ void PeerNode::install_snapshot(std::shared_ptr<const Snapshot> snap,
   host_.set_frame_and_attribution(snap->frame, snap->attribution);
   if (!hierarchy_) build_merge_state(std::move(hierarchy));
   own_submit_.bytes.clear();
-  journal_snapshot();
+  if (journaled)
+    adopt_journal_snapshot();
+  else
+    journal_snapshot();
   HostItem item;
   item.snapshot = true;
   item.version = replication_.version();
@@ -580,14 +598,28 @@ bool PeerNode::snapshot_flowing(Clock::time_point now) const {
 
 void PeerNode::send_snapshot(PeerId peer) {
   if (!joined_) return;
-  const Bytes bytes = host_.encode_snapshot_of(base_, replication_.recent_chains(kChainsSent));
-  host_.update_stats([](SessionStats& s) { ++s.snapshots_sent; });
+  if (std::find(snapshot_askers_.begin(), snapshot_askers_.end(), peer) == snapshot_askers_.end())
+    snapshot_askers_.push_back(peer);
+  if (snapshot_encoder_.busy()) return;
+  snapshot_encoder_.start(
+      [version = replication_.version(), chain = replication_.chain(),
+       snap = host_.snapshot_of(base_, replication_.recent_chains(kChainsSent))] {
+        return EncodedSnapshot{encode_snapshot(snap), version, chain};
+      });
+}
+
+void PeerNode::finish_snapshot_answer() {
+  const std::optional<EncodedSnapshot> s = snapshot_encoder_.take();
+  if (!s) return;
   const std::size_t chunk = std::max<std::size_t>(1024, options_.snapshot_chunk_bytes);
-  for (std::size_t offset = 0; offset < bytes.size(); offset += chunk) {
-    const std::size_t n = std::min(chunk, bytes.size() - offset);
-    send_to_peer(
-        peer, snapshot_chunk_message(header(), replication_.version(), replication_.chain(), offset,
-                                     bytes.size(), {bytes.data() + offset, n}));
+  for (const PeerId peer : std::exchange(snapshot_askers_, {})) {
+    if (!membership_.contains(peer)) continue;  // left while it was encoded
+    host_.update_stats([](SessionStats& st) { ++st.snapshots_sent; });
+    for (std::size_t offset = 0; offset < s->bytes.size(); offset += chunk) {
+      const std::size_t n = std::min(chunk, s->bytes.size() - offset);
+      send_to_peer(peer, snapshot_chunk_message(header(), s->version, s->chain, offset,
+                                                s->bytes.size(), {s->bytes.data() + offset, n}));
+    }
   }
 }
 
@@ -757,7 +789,12 @@ void PeerNode::finish_load() {
     // A snapshot that fails its checks: asked for again at the next greeting.
     return dropped(e.what());
   }
-  if (loaded) install_snapshot(std::move(loaded->snap), std::move(loaded->hierarchy));
+  if (!loaded) return;
+  if (!loaded->journal_error.empty() && journal_) {
+    journal_.reset();
+    event(EventKind::error, self_, loaded->journal_error + "; journaling stopped");
+  }
+  install_snapshot(std::move(loaded->snap), std::move(loaded->hierarchy), loaded->journaled);
 }
 
 void PeerNode::build_merge_state(std::shared_ptr<const Hierarchy> hierarchy) {

@@ -99,8 +99,10 @@ class PeerNode {
   void on_presence(PeerId sender, const fb::Presence& p, Clock::time_point now);
   void heard_timing(PeerId sender, const fb::Heartbeat& hb, Clock::time_point now);
   /// `hierarchy`: the snapshot mesh's, built by the loader (a joiner), or null (we have one).
+  /// `journaled`: the loader wrote it to the journal as it came (journal.h, adopt_snapshot).
   void install_snapshot(std::shared_ptr<const Snapshot> snap,
-                        std::shared_ptr<const Hierarchy> hierarchy = nullptr);
+                        std::shared_ptr<const Hierarchy> hierarchy = nullptr,
+                        bool journaled = false);
   /// Installs the joiner's first snapshot once the loader decoded it and built its hierarchy.
   void finish_load();
 
@@ -125,7 +127,11 @@ class PeerNode {
                         Clock::time_point now);
   void request_snapshot(PeerId from);
   bool snapshot_flowing(Clock::time_point now) const;
+  /// Answers `peer`'s request with a snapshot of our version, encoded beside the network
+  /// thread; members that ask while one is encoded get that one.
   void send_snapshot(PeerId peer);
+  /// Sends the encoded snapshot, once it is, to the members that asked.
+  void finish_snapshot_answer();
 
   // the journal (peer_node_journal.cpp): one call per event; a failure is reported and ends
   // journaling, never the session
@@ -134,7 +140,14 @@ class PeerNode {
   void snapshot_into(Journal& j);
   void create_journal();
   void journal_snapshot();
+  /// The snapshot the loader wrote for the journal, put into place (Journal::adopt_snapshot).
+  void adopt_journal_snapshot();
   void journal_version(const VersionRecord& r);
+  /// Starts a compaction of the journal's log into a snapshot of our version, written beside
+  /// the network thread (Journal::begin_compaction).
+  void begin_compaction(Journal& j);
+  /// Puts a written compaction into place, or removes one the journal gave up.
+  void finish_compaction();
   void journal_own();
   void journal_member(PeerId peer, const std::string& endpoint);
   bool hold_merges(Clock::time_point now) const { return now < resumed_merge_hold_; }
@@ -224,8 +237,20 @@ class PeerNode {
   struct LoadedSnapshot {
     std::shared_ptr<const Snapshot> snap;
     std::shared_ptr<const Hierarchy> hierarchy;
+    bool journaled = false;     ///< written for the journal's adopt_snapshot
+    std::string journal_error;  ///< why that failed (journaling then stops)
   };
   BackgroundTask<LoadedSnapshot> snapshot_loader_{[this] { transport_.wake(); }};
+  /// Our mesh's snapshot for the members that asked for one (snapshot_askers_), encoded from a
+  /// copy: at millions of faces encoding takes a good part of a second.
+  struct EncodedSnapshot {
+    Bytes bytes;
+    std::uint64_t version = 0, chain = 0;
+  };
+  BackgroundTask<EncodedSnapshot> snapshot_encoder_{[this] { transport_.wake(); }};
+  std::vector<PeerId> snapshot_askers_;
+  /// A journal compaction's snapshot, encoded and written synced; its result is its version.
+  BackgroundTask<std::uint64_t> compaction_writer_{[this] { transport_.wake(); }};
 
   std::vector<std::uint64_t> inbound_;  // aligned copy of a misaligned message
   std::thread thread_;

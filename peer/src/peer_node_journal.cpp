@@ -1,8 +1,10 @@
 // The network thread's side of the journal (journal.h): what PeerNode writes on each event, and
 // how it starts again from a journal. Each write is synced before the node goes on, so a
-// version reaches the host (and counts as acknowledged) only once it is on disk.
+// version reaches the host (and counts as acknowledged) only once it is on disk. A
+// compaction's snapshot is encoded and written beside the network thread.
 #include <algorithm>
 #include <chrono>
+#include <optional>
 #include <string>
 
 #include "csculpt/error.h"
@@ -48,7 +50,7 @@ void PeerNode::create_journal() {
 /// A snapshot of our version and a fresh log after it.
 void PeerNode::snapshot_into(Journal& j) {
   // With the chains before it, so a resumed peer still finds where another branch forked.
-  j.reset(host_.encode_snapshot_of(base_, replication_.recent_chains(kChainsSent)),
+  j.reset(encode_snapshot(host_.snapshot_of(base_, replication_.recent_chains(kChainsSent))),
           replication_.version(), replication_.chain());
   host_.update_stats([](SessionStats& s) { ++s.journal_snapshots; });
 }
@@ -57,10 +59,47 @@ void PeerNode::journal_snapshot() {
   journal([&](Journal& j) { snapshot_into(j); });
 }
 
+void PeerNode::adopt_journal_snapshot() {
+  journal([&](Journal& j) {
+    j.adopt_snapshot(replication_.version(), replication_.chain());
+    host_.update_stats([](SessionStats& s) { ++s.journal_snapshots; });
+  });
+}
+
 void PeerNode::journal_version(const VersionRecord& r) {
   journal([&](Journal& j) {
     j.append_version(r);
-    if (j.wants_compaction()) snapshot_into(j);
+    // A compaction given up (reset) may still be writing: the next version tries again.
+    if (j.wants_compaction() && !compaction_writer_.busy()) begin_compaction(j);
+  });
+}
+
+void PeerNode::begin_compaction(Journal& j) {
+  const std::uint64_t version = replication_.version(), chain = replication_.chain();
+  j.begin_compaction(version, chain);
+  compaction_writer_.start(
+      [dir = j.dir(), version, chain,
+       snap = host_.snapshot_of(base_, replication_.recent_chains(kChainsSent))] {
+        write_compaction_snapshot(dir, encode_snapshot(snap), version, chain);
+        return version;
+      });
+}
+
+void PeerNode::finish_compaction() {
+  std::optional<std::uint64_t> written;
+  try {
+    written = compaction_writer_.take();
+  } catch (const std::exception& e) {  // as any journal write that fails
+    if (!journal_) return;
+    journal_.reset();
+    return event(EventKind::error, self_, std::string(e.what()) + "; journaling stopped");
+  }
+  if (!written) return;
+  if (!journal_ || journal_->compacting() != written)
+    return discard_compaction_snapshot(options_.journal);
+  journal([&](Journal& j) {
+    j.finish_compaction();
+    host_.update_stats([](SessionStats& s) { ++s.journal_snapshots; });
   });
 }
 

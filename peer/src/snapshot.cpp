@@ -69,6 +69,10 @@ std::vector<std::uint8_t> encode_snapshot(const Mesh& mesh, const MergeFrame& fr
   return {b.GetBufferPointer(), b.GetBufferPointer() + b.GetSize()};
 }
 
+std::vector<std::uint8_t> encode_snapshot(const Snapshot& snap) {
+  return encode_snapshot(snap.mesh, snap.frame, snap.attribution, snap.chains);
+}
+
 Snapshot decode_snapshot(std::span<const std::uint8_t> bytes) {
   flatbuffers::Verifier verifier(bytes.data(), bytes.size(), 8, 1000000, bytes.size());
   if (!verifier.VerifyBuffer<fb::MeshSnapshot>(nullptr))

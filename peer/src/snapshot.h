@@ -32,6 +32,7 @@ struct Snapshot {
 std::vector<std::uint8_t> encode_snapshot(const Mesh& mesh, const MergeFrame& frame,
                                           const std::map<PeerId, std::vector<float>>& attribution,
                                           const ChainHistory& chains = {});
+std::vector<std::uint8_t> encode_snapshot(const Snapshot& snap);
 /// Throws InvalidInput saying what is wrong: failed verification, a mesh that fails validate(),
 /// a missing frame or attribution of the wrong size.
 Snapshot decode_snapshot(std::span<const std::uint8_t> bytes);

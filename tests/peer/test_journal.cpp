@@ -1,15 +1,21 @@
 // The journal (peer/src/journal.h): round trip, a torn tail cut at every byte dropped and never
 // misread, a corrupt checksum, compaction bounding the log, clear errors for a missing or
-// garbage directory; and Session::resume bringing back the agreed mesh and the unmerged edit.
+// garbage directory, compactions written beside the network thread; and Session::resume
+// bringing back the agreed mesh and the unmerged edit.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <optional>
 #include <thread>
 
 #include "csculpt/error.h"
 #include "csculpt/peer/session.h"
+#include "csculpt/testkit/generate.h"
+#include "csculpt/vec3.h"
 #include "invite.h"
 #include "journal.h"
 #include "pieces.h"
@@ -249,6 +255,73 @@ TEST(Journal, ACompactionStoppedBetweenItsRenamesLoadsTheNewLog) {
   EXPECT_FALSE(fs::exists(dir.file("log.tmp")));
 }
 
+// A compaction whose snapshot is written beside the network thread: until it is put into
+// place the journal is the old snapshot and the whole log (a crash then loses nothing and
+// ignores the half-made snapshot); once it is, the new snapshot and the versions appended
+// meanwhile, the own edit based on one of them and the members.
+TEST(Journal, ACompactionBesideTheNetworkThreadKeepsWhatCameMeanwhile) {
+  TempDir dir("beside");
+  const std::vector<VersionRecord> written = fill(dir.path(), 5);
+  const JournalState before = load_journal(dir.path());
+  Journal j = Journal::reopen(dir.path(), before, before.meta, {});
+  j.begin_compaction(5, written.back().chain);
+  EXPECT_EQ(j.compacting(), std::optional<std::uint64_t>(5));
+  std::thread writer(
+      [&] { write_compaction_snapshot(dir.path(), sample_snapshot(), 5, written.back().chain); });
+  std::vector<VersionRecord> after = written;
+  for (std::uint64_t v = 6; v <= 8; ++v) {
+    after.push_back(sample_version(v, after.back().chain));
+    j.append_version(after.back());
+    EXPECT_FALSE(j.wants_compaction());  // one at a time
+  }
+  j.append_own({7, 4, Bytes{1, 1, 2, 3}});
+  j.append_member(11, "tcp://127.0.0.1:1111");
+  writer.join();
+  const JournalState crashed = load_journal(dir.path());  // as if it stopped here
+  EXPECT_EQ(crashed.version, 0u);
+  ASSERT_EQ(crashed.versions.size(), 8u);
+  for (std::size_t i = 0; i < 8; ++i) expect_same(crashed.versions[i], after[i]);
+  j.finish_compaction();
+  EXPECT_FALSE(j.compacting());
+  const JournalState s = load_journal(dir.path());
+  EXPECT_EQ(s.version, 5u);
+  EXPECT_EQ(s.chain, written.back().chain);
+  EXPECT_EQ(s.snapshot, sample_snapshot());
+  ASSERT_EQ(s.versions.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) expect_same(s.versions[i], after[5 + i]);
+  ASSERT_TRUE(s.own);
+  EXPECT_EQ(s.own->base_version, 7u);
+  EXPECT_EQ(s.own->diff, (Bytes{1, 1, 2, 3}));
+  EXPECT_EQ(s.members.size(), 3u);
+  EXPECT_EQ(s.members.at(11), "tcp://127.0.0.1:1111");
+  EXPECT_FALSE(fs::exists(dir.file("snapshot.next")));
+  EXPECT_FALSE(fs::exists(dir.file("log.tmp")));
+  // The log goes on from there.
+  after.push_back(sample_version(9, after.back().chain));
+  j.append_version(after.back());
+  EXPECT_EQ(load_journal(dir.path()).versions.size(), 4u);
+}
+
+// A snapshot taken at once (a divergence, a branch's state) while a compaction is written
+// gives the compaction up: the journal is the reset's, and the compaction's file goes.
+TEST(Journal, AResetDuringACompactionGivesItUp) {
+  TempDir dir("given-up");
+  const std::vector<VersionRecord> written = fill(dir.path(), 3);
+  const JournalState before = load_journal(dir.path());
+  Journal j = Journal::reopen(dir.path(), before, before.meta, {});
+  j.begin_compaction(3, written.back().chain);
+  write_compaction_snapshot(dir.path(), sample_snapshot(), 3, written.back().chain);
+  j.reset(sample_snapshot(), 9, 99);
+  EXPECT_FALSE(j.compacting());
+  discard_compaction_snapshot(dir.path());
+  j.finish_compaction();  // nothing under way: a no-op
+  const JournalState s = load_journal(dir.path());
+  EXPECT_EQ(s.version, 9u);
+  EXPECT_EQ(s.chain, 99u);
+  EXPECT_TRUE(s.versions.empty());
+  EXPECT_FALSE(fs::exists(dir.file("snapshot.next")));
+}
+
 std::string load_error(const std::string& dir) {
   try {
     load_journal(dir);
@@ -335,6 +408,58 @@ TEST(SessionResume, BringsBackTheUnmergedEditAndMergesIt) {
   ASSERT_TRUE(wait_until([&] { return r->update(local) > 0; }, Millis{8000}));
   EXPECT_EQ(mesh_digest(r->base()), local_digest);
   EXPECT_EQ(r->stats().strokes_acknowledged, 2u);
+}
+
+// A compaction encodes the whole mesh and writes it synced: at millions of faces, seconds on
+// a shared disk. On the network thread that silenced the journaling peer past the others'
+// expiry, every bound's worth of versions (a merger journaling its session was replaced and
+// the session went on without it). The expiry here is half of what one compaction of this
+// mesh takes, timed here (sanitizers slow both alike): the compactions are written beside the
+// network thread, nobody expires the merger, and its journal resumes the last version.
+TEST(SessionJournal, CompactionsLongerThanTheExpiryLeaveThePeerAMember) {
+  const Mesh mesh = make_sphere(1000000);
+  TempDir timing("timing"), dir("compacting");
+  fs::create_directories(timing.path());
+  const auto t0 = Clock::now();
+  write_compaction_snapshot(timing.path(),
+                            encode_snapshot(mesh, MergeFrame::fit(mesh.positions), {}), 1, 1);
+  const auto compaction_time = std::chrono::duration_cast<Millis>(Clock::now() - t0);
+  const Millis expired = std::max(Millis{150}, compaction_time / 2);
+  auto options = [&](PeerId id) {
+    SessionOptions o = fast_options(id);
+    o.membership = {expired / 8, expired / 2, expired};
+    return o;
+  };
+  SessionOptions journaled = options(1);
+  journaled.journal = dir.path();
+  journaled.journal_max_log_versions = 2;
+  auto a = Session::create(mesh, journaled);
+  auto b = Session::join(a->invite(), options(2), Millis{120000});
+  ASSERT_TRUE(
+      wait_until([&] { return a->peers().size() == 1 && b->peers().size() == 1; }, Millis{60000}));
+  b->poll_events();
+  Mesh local = mesh;
+  // Versions until the first snapshot and three compactions are in place (each compaction
+  // starts with the first version past the bound once the one before is done).
+  for (int k = 0; a->stats().journal_snapshots < 4; ++k) {
+    ASSERT_LT(k, 400) << a->stats().journal_snapshots << " snapshots";
+    local = stroked(local, unit(Vec3f{0.01f * float(k), 1, 0.5f}), {0, 0, 0.05f});
+    ASSERT_TRUE(a->submit(local, 1));
+    ASSERT_TRUE(wait_until([&] { return a->update(local) > 0; }, Millis{60000}));
+  }
+  std::this_thread::sleep_for(2 * expired);
+  ASSERT_GT(compaction_time, expired) << "a compaction was not longer than the expiry";
+  for (const Event& e : b->poll_events())
+    EXPECT_NE(e.kind, EventKind::peer_left) << "peer " << e.peer << " expired";
+  EXPECT_EQ(b->stats().merger, 1u);
+  const std::uint64_t version = a->version(), digest = mesh_digest(a->base());
+  b.reset();
+  a.reset();
+  EXPECT_GE(load_journal(dir.path()).version, 4u);  // a compaction's snapshot, not the first
+  Mesh resumed;
+  auto r = Session::resume(dir.path(), resumed, options(1));
+  EXPECT_EQ(r->version(), version);
+  EXPECT_EQ(mesh_digest(r->base()), digest);
 }
 
 TEST(SessionResume, ADirectoryWithoutAJournalIsRefusedNamingTheFile) {
