@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -410,21 +411,33 @@ TEST(SessionResume, BringsBackTheUnmergedEditAndMergesIt) {
   EXPECT_EQ(r->stats().strokes_acknowledged, 2u);
 }
 
+/// The time one compaction of `mesh` takes: its snapshot encoded and written synced.
+Millis compaction_time(const Mesh& mesh, const std::string& dir) {
+  const auto t0 = Clock::now();
+  write_compaction_snapshot(dir, encode_snapshot(mesh, MergeFrame::fit(mesh.positions), {}), 1, 1);
+  return std::chrono::duration_cast<Millis>(Clock::now() - t0);
+}
+
 // A compaction encodes the whole mesh and writes it synced: at millions of faces, seconds on
 // a shared disk. On the network thread that silenced the journaling peer past the others'
 // expiry, every bound's worth of versions (a merger journaling its session was replaced and
 // the session went on without it). The expiry here is half of what one compaction of this
-// mesh takes, timed here (sanitizers slow both alike): the compactions are written beside the
-// network thread, nobody expires the merger, and its journal resumes the last version.
+// mesh takes, timed here (sanitizers slow both alike, and under them a smaller mesh is
+// enough): the compactions are written beside the network thread, nobody expires the
+// merger, and its journal resumes the last version.
 TEST(SessionJournal, CompactionsLongerThanTheExpiryLeaveThePeerAMember) {
-  const Mesh mesh = make_sphere(1000000);
   TempDir timing("timing"), dir("compacting");
   fs::create_directories(timing.path());
-  const auto t0 = Clock::now();
-  write_compaction_snapshot(timing.path(),
-                            encode_snapshot(mesh, MergeFrame::fit(mesh.positions), {}), 1, 1);
-  const auto compaction_time = std::chrono::duration_cast<Millis>(Clock::now() - t0);
-  const Millis expired = std::max(Millis{150}, compaction_time / 2);
+  // The smallest sphere whose compaction takes 400 ms (sanitizers slow it: a smaller one).
+  Mesh mesh;
+  Millis compaction{0};
+  for (std::uint32_t faces = 250000; compaction < Millis{400} && faces <= 4000000; faces *= 2) {
+    mesh = make_sphere(faces);
+    compaction = compaction_time(mesh, timing.path());
+  }
+  std::printf("%zu faces, compaction %lld ms\n", mesh.triangles.size(),
+              static_cast<long long>(compaction.count()));
+  const Millis expired = std::max(Millis{150}, compaction / 2);
   auto options = [&](PeerId id) {
     SessionOptions o = fast_options(id);
     o.membership = {expired / 8, expired / 2, expired};
@@ -448,7 +461,7 @@ TEST(SessionJournal, CompactionsLongerThanTheExpiryLeaveThePeerAMember) {
     ASSERT_TRUE(wait_until([&] { return a->update(local) > 0; }, Millis{60000}));
   }
   std::this_thread::sleep_for(2 * expired);
-  ASSERT_GT(compaction_time, expired) << "a compaction was not longer than the expiry";
+  ASSERT_GT(compaction, expired) << "a compaction was not longer than the expiry";
   for (const Event& e : b->poll_events())
     EXPECT_NE(e.kind, EventKind::peer_left) << "peer " << e.peer << " expired";
   EXPECT_EQ(b->stats().merger, 1u);
