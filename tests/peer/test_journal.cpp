@@ -256,6 +256,12 @@ TEST(Journal, ACompactionStoppedBetweenItsRenamesLoadsTheNewLog) {
   EXPECT_FALSE(fs::exists(dir.file("log.tmp")));
 }
 
+/// The journal in `dir`, reopened to append to.
+Journal reopened(const std::string& dir) {
+  const JournalState s = load_journal(dir);
+  return Journal::reopen(dir, s, s.meta, {});
+}
+
 // A compaction whose snapshot is written beside the network thread: until it is put into
 // place the journal is the old snapshot and the whole log (a crash then loses nothing and
 // ignores the half-made snapshot); once it is, the new snapshot and the versions appended
@@ -263,8 +269,7 @@ TEST(Journal, ACompactionStoppedBetweenItsRenamesLoadsTheNewLog) {
 TEST(Journal, ACompactionBesideTheNetworkThreadKeepsWhatCameMeanwhile) {
   TempDir dir("beside");
   const std::vector<VersionRecord> written = fill(dir.path(), 5);
-  const JournalState before = load_journal(dir.path());
-  Journal j = Journal::reopen(dir.path(), before, before.meta, {});
+  Journal j = reopened(dir.path());
   j.begin_compaction(5, written.back().chain);
   EXPECT_EQ(j.compacting(), std::optional<std::uint64_t>(5));
   std::thread writer(
@@ -308,8 +313,7 @@ TEST(Journal, ACompactionBesideTheNetworkThreadKeepsWhatCameMeanwhile) {
 TEST(Journal, AResetDuringACompactionGivesItUp) {
   TempDir dir("given-up");
   const std::vector<VersionRecord> written = fill(dir.path(), 3);
-  const JournalState before = load_journal(dir.path());
-  Journal j = Journal::reopen(dir.path(), before, before.meta, {});
+  Journal j = reopened(dir.path());
   j.begin_compaction(3, written.back().chain);
   write_compaction_snapshot(dir.path(), sample_snapshot(), 3, written.back().chain);
   j.reset(sample_snapshot(), 9, 99);

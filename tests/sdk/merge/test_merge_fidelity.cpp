@@ -203,6 +203,21 @@ Mesh turned_detail_ideal(const Mesh& base, const Mesh& coarse, const Mesh& fine)
   return ideal;
 }
 
+struct FullAndSum {
+  double full, sum;
+};
+
+/// rel_err of `full` and of `sum` against turned_detail_ideal (printed).
+FullAndSum turned_detail_errors(const Mesh& base, const Hierarchy& h, const Mesh& coarse,
+                                const Mesh& fine) {
+  const Mesh ideal = turned_detail_ideal(base, coarse, fine);
+  const FullAndSum e{
+      rel_error(base, fine, merged(base, h, {coarse, fine}), ideal),
+      rel_error(base, fine, merged(base, h, {coarse, fine}, MergeMethod::sum), ideal)};
+  std::printf("rel_err against the frame ideal: full %.4f, sum %.4f\n", e.full, e.sum);
+  return e;
+}
+
 // A sideways detail (a tiny grab) inside another artist's broad swirl: the frame ideal turns
 // its displacement by the turn of the surface's normal, not by the surface's spin about it
 // (turned by the spin too: 0.50 rel_err). Also: the grab moves the same way as the swirl
@@ -213,14 +228,9 @@ TEST(MergeFidelity, ASidewaysDetailRidesTheTurnOfTheSurfaceNotItsSpin) {
   const Vec3f c = unit({0.3f, 0.2f, 0.93f});
   const Mesh coarse = deformed(base, swirl(c, 0.8f, 1.2f));
   const Mesh fine = deformed(base, grab(unit(add(c, Vec3f{0.4f, 0, 0})), {0, 0.02f, 0}, 0.15f));
-  const Mesh ideal = turned_detail_ideal(base, coarse, fine);
-  const double e_full = rel_error(base, fine, merged(base, h, {coarse, fine}), ideal);
-  const double e_sum =
-      rel_error(base, fine, merged(base, h, {coarse, fine}, MergeMethod::sum), ideal);
-  RecordProperty("full", std::to_string(e_full));
-  RecordProperty("sum", std::to_string(e_sum));
-  EXPECT_LT(e_full, 0.05);
-  EXPECT_LT(e_full, 0.5 * e_sum);
+  const FullAndSum e = turned_detail_errors(base, h, coarse, fine);
+  EXPECT_LT(e.full, 0.05);
+  EXPECT_LT(e.full, 0.5 * e.sum);
 }
 
 /// A pinch: points within r of the surface point c drawn toward it by `amount` of the way at
@@ -245,12 +255,8 @@ TEST(MergeFidelity, ABroadLiftCarriesASwirlInsideIt) {
   const Vec3f c = unit({0.2f, -0.3f, 0.93f});
   const Mesh coarse = deformed(base, bump(c, 0.13f, 1.4f));
   const Mesh fine = deformed(base, swirl(c, 0.9f, 1.4f));
-  const Mesh ideal = turned_detail_ideal(base, coarse, fine);
-  const double e_full = rel_error(base, fine, merged(base, h, {coarse, fine}), ideal);
-  const double e_sum =
-      rel_error(base, fine, merged(base, h, {coarse, fine}, MergeMethod::sum), ideal);
-  std::printf("rel_err against the frame ideal: full %.4f, sum %.4f\n", e_full, e_sum);
-  EXPECT_LT(e_full, 0.5 * e_sum);
+  const FullAndSum e = turned_detail_errors(base, h, coarse, fine);
+  EXPECT_LT(e.full, 0.5 * e.sum);
 }
 
 // The other side of the same rule: a pinch squeezes its ring evenly too, but it moves the
@@ -262,12 +268,8 @@ TEST(MergeFidelity, APinchUnderATwistRidesIt) {
   const Hierarchy h = Hierarchy::build(base);
   const Mesh coarse = deformed(base, twist(1.2f));
   const Mesh fine = deformed(base, pinch(unit({0.5f, -0.3f, 0.8f}), 0.3f, 0.4f));
-  const Mesh ideal = turned_detail_ideal(base, coarse, fine);
-  const double e_full = rel_error(base, fine, merged(base, h, {coarse, fine}), ideal);
-  const double e_sum =
-      rel_error(base, fine, merged(base, h, {coarse, fine}, MergeMethod::sum), ideal);
-  std::printf("rel_err against the frame ideal: full %.4f, sum %.4f\n", e_full, e_sum);
-  EXPECT_LT(e_full, 0.005 * e_sum);
+  const FullAndSum e = turned_detail_errors(base, h, coarse, fine);
+  EXPECT_LT(e.full, 0.005 * e.sum);
 }
 
 /// The sphere cut along the plane y = 0 for x > 0: the faces on the y < 0 side get their own
