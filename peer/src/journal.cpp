@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <stdexcept>
 #include <utility>
 
 #include "csculpt/error.h"
@@ -468,7 +469,7 @@ void discard_compaction_snapshot(const std::string& dir) {
 }
 
 void Journal::adopt_snapshot(std::uint64_t version, std::uint64_t chain) {
-  compaction_.reset();
+  if (compaction_) throw std::logic_error("journal: adopt_snapshot during a compaction");
   install(file_in(dir_, kCompactionSnapshot), version, chain, {}, version);
 }
 
@@ -501,8 +502,11 @@ void Journal::install(const std::string& snapshot_path, std::uint64_t version, s
   for (const auto& [peer, endpoint] : members_)
     put_bytes(log, frame(kMemberRecord, member_payload(peer, endpoint)));
   write_synced(log_path + ".tmp", log);
-  // The snapshot first: until the log is renamed too, load_journal takes log.tmp.
+  // The snapshot first, made durable before the log follows it: until the log is renamed
+  // too, load_journal takes log.tmp. (Renamed together, a filesystem that kept the second
+  // rename and lost the first would leave the old snapshot with a log that does not follow it.)
   rename_file(snapshot_path, snap_path);
+  sync_dir(dir_);
   rename_file(log_path + ".tmp", log_path);
   sync_dir(dir_);
   has_snapshot_ = true;

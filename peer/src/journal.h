@@ -51,9 +51,10 @@ struct JournalState {
 /// A bad record in the log ends it there (dropped_bytes, dropped_reason).
 JournalState load_journal(const std::string& dir);
 
-/// Writes the snapshot of a compaction under way (Journal::begin_compaction) to `dir`, synced,
-/// under a name of its own: it touches nothing the journal writes, so it runs beside the
-/// network thread while that goes on appending. Throws IoError.
+/// Writes the snapshot of a compaction under way (Journal::begin_compaction), or a joiner's
+/// first (Journal::adopt_snapshot), to `dir`, synced, under a name of its own (`snapshot.next`):
+/// no append touches it, so it runs beside the network thread while that goes on appending.
+/// One writer at a time. Throws IoError.
 void write_compaction_snapshot(const std::string& dir, std::span<const std::uint8_t> snapshot,
                                std::uint64_t version, std::uint64_t chain);
 /// Removes what write_compaction_snapshot wrote for a compaction given up (reset() came first).
@@ -99,12 +100,12 @@ class Journal {
   /// The version of the compaction under way, if any.
   std::optional<std::uint64_t> compacting() const;
   /// Once write_compaction_snapshot returned: the new log (its head, the versions appended
-  /// since, the own edit if based on one of them, the members) written and synced, then both
-  /// renamed into place as reset() does.
+  /// since, the own edit if based on the snapshot's version or one after it, the members)
+  /// written and synced, then both renamed into place as reset() does.
   void finish_compaction();
   /// The snapshot write_compaction_snapshot wrote of `version` put into place at once, with a
-  /// fresh log after it (a joiner's first snapshot, written as it arrived, off the network
-  /// thread). Gives up a compaction under way.
+  /// fresh log after it: a joiner's first snapshot, written as it arrived, off the network
+  /// thread. Needs no compaction under way (its writer uses the same file).
   void adopt_snapshot(std::uint64_t version, std::uint64_t chain);
   const std::string& dir() const { return dir_; }
   /// Whether a snapshot was written (before it, there is nothing to resume).

@@ -6,15 +6,16 @@ namespace csculpt::peer {
 
 Membership::Membership(PeerId self, std::string self_endpoint, MembershipOptions options)
     : self_(self), options_(options) {
-  members_[self] = Member{self, std::move(self_endpoint), {}, false};
+  members_[self] = Member{self, std::move(self_endpoint), {}, false, true};
 }
 
 bool Membership::heard(PeerId peer, const std::string& endpoint, Clock::time_point now) {
   if (peer == self_) return false;
   tombstones_.erase(peer);  // a peer we hear from directly is alive, whatever we thought
-  auto [it, inserted] = members_.try_emplace(peer, Member{peer, endpoint, now, false});
+  auto [it, inserted] = members_.try_emplace(peer, Member{peer, endpoint, now, false, true});
   if (!inserted) {
     it->second.last_heard = now;
+    it->second.heard_directly = true;
     if (it->second.evasive) revived_.push_back(peer);
     it->second.evasive = false;
     if (!endpoint.empty()) it->second.endpoint = endpoint;
@@ -36,7 +37,7 @@ bool Membership::learnt(PeerId peer, const std::string& endpoint, Clock::time_po
     if (now - t->second < 2 * options_.expired) return false;
     tombstones_.erase(t);
   }
-  members_.emplace(peer, Member{peer, endpoint, now, false});
+  members_.emplace(peer, Member{peer, endpoint, now, false, false});
   return true;
 }
 
@@ -82,6 +83,13 @@ std::vector<const Member*> Membership::others() const {
   std::vector<const Member*> v;
   for (const auto& [id, m] : members_)
     if (id != self_) v.push_back(&m);
+  return v;
+}
+
+std::vector<const Member*> Membership::vouched() const {
+  std::vector<const Member*> v;
+  for (const auto& [id, m] : members_)
+    if (m.heard_directly && !m.evasive) v.push_back(&m);
   return v;
 }
 

@@ -600,7 +600,10 @@ void PeerNode::send_snapshot(PeerId peer) {
   if (!joined_) return;
   if (std::find(snapshot_askers_.begin(), snapshot_askers_.end(), peer) == snapshot_askers_.end())
     snapshot_askers_.push_back(peer);
-  if (snapshot_encoder_.busy()) return;
+  if (!snapshot_encoder_.busy()) encode_snapshot_answer();
+}
+
+void PeerNode::encode_snapshot_answer() {
   snapshot_encoder_.start(
       [version = replication_.version(), chain = replication_.chain(),
        snap = host_.snapshot_of(base_, replication_.recent_chains(kChainsSent))] {
@@ -611,6 +614,9 @@ void PeerNode::send_snapshot(PeerId peer) {
 void PeerNode::finish_snapshot_answer() {
   const std::optional<EncodedSnapshot> s = snapshot_encoder_.take();
   if (!s) return;
+  // Our state was replaced meanwhile (a divergence took the merger's branch): the encoded one
+  // is a lost branch's, which the askers would install and then have to leave again.
+  if (replication_.chain_at(s->version) != s->chain) return encode_snapshot_answer();
   const std::size_t chunk = std::max<std::size_t>(1024, options_.snapshot_chunk_bytes);
   for (const PeerId peer : std::exchange(snapshot_askers_, {})) {
     if (!membership_.contains(peer)) continue;  // left while it was encoded
@@ -674,8 +680,8 @@ void PeerNode::joining_heartbeat(Clock::time_point now) {
 
 void PeerNode::send_heartbeat_to(const std::string& endpoint) {
   std::vector<std::pair<PeerId, std::string>> members;
-  for (const auto& [id, m] : membership_.members())
-    if (!m.endpoint.empty()) members.emplace_back(id, m.endpoint);
+  for (const Member* m : membership_.vouched())
+    if (!m->endpoint.empty()) members.emplace_back(m->id, m->endpoint);
   const Clock::time_point now = Clock::now();
   transport_.send(endpoint, heartbeat_message(header(), replication_.version(),
                                               replication_.chain(), election_.merger().value_or(0),

@@ -130,7 +130,9 @@ class PeerNode {
   /// Answers `peer`'s request with a snapshot of our version, encoded beside the network
   /// thread; members that ask while one is encoded get that one.
   void send_snapshot(PeerId peer);
-  /// Sends the encoded snapshot, once it is, to the members that asked.
+  void encode_snapshot_answer();
+  /// Sends the encoded snapshot, once it is, to the members that asked (encoded again if our
+  /// state left its branch meanwhile).
   void finish_snapshot_answer();
 
   // the journal (peer_node_journal.cpp): one call per event; a failure is reported and ends

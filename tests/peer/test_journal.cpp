@@ -11,6 +11,7 @@
 #include <fstream>
 #include <iterator>
 #include <optional>
+#include <stdexcept>
 #include <thread>
 
 #include "csculpt/error.h"
@@ -257,9 +258,9 @@ TEST(Journal, ACompactionStoppedBetweenItsRenamesLoadsTheNewLog) {
 }
 
 /// The journal in `dir`, reopened to append to.
-Journal reopened(const std::string& dir) {
+Journal reopened(const std::string& dir, JournalLimits limits = {}) {
   const JournalState s = load_journal(dir);
-  return Journal::reopen(dir, s, s.meta, {});
+  return Journal::reopen(dir, s, s.meta, limits);
 }
 
 // A compaction whose snapshot is written beside the network thread: until it is put into
@@ -269,7 +270,10 @@ Journal reopened(const std::string& dir) {
 TEST(Journal, ACompactionBesideTheNetworkThreadKeepsWhatCameMeanwhile) {
   TempDir dir("beside");
   const std::vector<VersionRecord> written = fill(dir.path(), 5);
-  Journal j = reopened(dir.path());
+  JournalLimits limits;
+  limits.max_log_versions = 2;  // past it from the start: only the compaction under way holds
+  Journal j = reopened(dir.path(), limits);
+  EXPECT_TRUE(j.wants_compaction());
   j.begin_compaction(5, written.back().chain);
   EXPECT_EQ(j.compacting(), std::optional<std::uint64_t>(5));
   std::thread writer(
@@ -316,10 +320,12 @@ TEST(Journal, AResetDuringACompactionGivesItUp) {
   Journal j = reopened(dir.path());
   j.begin_compaction(3, written.back().chain);
   write_compaction_snapshot(dir.path(), sample_snapshot(), 3, written.back().chain);
+  // A joiner's snapshot is never adopted then: its writer would share the compaction's file.
+  EXPECT_THROW(j.adopt_snapshot(3, written.back().chain), std::logic_error);
   j.reset(sample_snapshot(), 9, 99);
   EXPECT_FALSE(j.compacting());
-  discard_compaction_snapshot(dir.path());
-  j.finish_compaction();  // nothing under way: a no-op
+  discard_compaction_snapshot(dir.path());  // what PeerNode does once the writer is done
+  j.finish_compaction();                    // nothing under way: a no-op
   const JournalState s = load_journal(dir.path());
   EXPECT_EQ(s.version, 9u);
   EXPECT_EQ(s.chain, 99u);

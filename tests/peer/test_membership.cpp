@@ -1,6 +1,8 @@
 // Membership thresholds and the election, driven by a clock the test controls.
 #include <gtest/gtest.h>
 
+#include <vector>
+
 #include "csculpt/peer/membership.h"
 
 namespace {
@@ -48,6 +50,29 @@ TEST(Membership, GossipAboutAPeerThatLeftIsNotBelievedAtOnce) {
   EXPECT_FALSE(m.learnt(7, "tcp://b", t0 + 200ms));
   EXPECT_FALSE(m.contains(7));
   EXPECT_TRUE(m.learnt(7, "tcp://b", t0 + 100ms + 1300ms));
+}
+
+// What a heartbeat passes on: self and the peers heard from directly, not evasive. Survivors
+// of a dead peer that relayed it to one another learnt it back from each other as their
+// tombstones aged, and it kept joining and expiring on a healthy network after it died.
+TEST(Membership, HeartbeatsVouchOnlyForPeersHeardDirectlyAndNotSilent) {
+  const Clock::time_point t0{};
+  Membership m(5, "tcp://a", thresholds());
+  m.heard(7, "tcp://b", t0);
+  m.learnt(9, "tcp://c", t0);  // only gossiped about
+  auto ids = [&] {
+    std::vector<PeerId> v;
+    for (const Member* x : m.vouched()) v.push_back(x->id);
+    return v;
+  };
+  EXPECT_EQ(ids(), (std::vector<PeerId>{5, 7}));
+  m.heard(9, "", t0 + 100ms);
+  EXPECT_EQ(ids(), (std::vector<PeerId>{5, 7, 9}));
+  m.heard(9, "", t0 + 200ms);
+  m.tick(t0 + 350ms);  // 7 silent past the evasive threshold
+  EXPECT_EQ(ids(), (std::vector<PeerId>{5, 9}));
+  m.heard(7, "", t0 + 400ms);
+  EXPECT_EQ(ids(), (std::vector<PeerId>{5, 7, 9}));
 }
 
 TEST(Election, LowestLivePeerMergesAndAnnouncesANewEpoch) {

@@ -28,6 +28,7 @@ struct Member {
   std::string endpoint;
   Clock::time_point last_heard{};
   bool evasive = false;
+  bool heard_directly = false;  ///< heard from it, not only of it (gossip)
 };
 
 /// The members one peer knows of, itself included.
@@ -63,6 +64,11 @@ class Membership {
   const std::map<PeerId, Member>& members() const { return members_; }
   /// The others (not self), in increasing id order.
   std::vector<const Member*> others() const;
+  /// The members a heartbeat vouches for, in increasing id order: self and those heard from
+  /// directly and not evasive. A peer only gossiped about, or gone silent, is not passed on:
+  /// survivors that relayed a dead peer to one another learnt it back from each other, each
+  /// once its tombstone aged, and kept it joining and expiring after it died.
+  std::vector<const Member*> vouched() const;
   const MembershipOptions& options() const { return options_; }
 
  private:

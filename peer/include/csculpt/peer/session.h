@@ -134,7 +134,9 @@ struct SessionStats {
   /// for the handshake timeout (3 s), or hung up midway. Not in csc_session_stats.
   std::uint64_t handshakes_abandoned = 0;
   // the journal (SessionOptions::journal): writes synced, and the time they took on the network
-  // thread (an agreed version, a submit, a snapshot). Not in csc_session_stats.
+  // thread (an agreed version, a submit, a snapshot taken there). A compaction's snapshot is
+  // encoded and written beside that thread: it counts in journal_snapshots and journal_writes,
+  // its time only for the new log's writing and renames. Not in csc_session_stats.
   std::uint64_t journal_writes = 0;
   std::uint64_t journal_snapshots = 0;
   double journal_ms_sum = 0;
