@@ -92,7 +92,6 @@ void PeerNode::loop() {
       receive_all();
       finish_merge();
       finish_load();
-      finish_snapshot_answer();
       finish_compaction();
       if (!run_commands()) break;
       run_timers(Clock::now());
@@ -598,34 +597,15 @@ bool PeerNode::snapshot_flowing(Clock::time_point now) const {
 
 void PeerNode::send_snapshot(PeerId peer) {
   if (!joined_) return;
-  if (std::find(snapshot_askers_.begin(), snapshot_askers_.end(), peer) == snapshot_askers_.end())
-    snapshot_askers_.push_back(peer);
-  if (!snapshot_encoder_.busy()) encode_snapshot_answer();
-}
-
-void PeerNode::encode_snapshot_answer() {
-  snapshot_encoder_.start(
-      [version = replication_.version(), chain = replication_.chain(),
-       snap = host_.snapshot_of(base_, replication_.recent_chains(kChainsSent))] {
-        return EncodedSnapshot{encode_snapshot(snap), version, chain};
-      });
-}
-
-void PeerNode::finish_snapshot_answer() {
-  const std::optional<EncodedSnapshot> s = snapshot_encoder_.take();
-  if (!s) return;
-  // Our state was replaced meanwhile (a divergence took the merger's branch): the encoded one
-  // is a lost branch's, which the askers would install and then have to leave again.
-  if (replication_.chain_at(s->version) != s->chain) return encode_snapshot_answer();
+  const Bytes bytes =
+      encode_snapshot(host_.snapshot_of(base_, replication_.recent_chains(kChainsSent)));
+  host_.update_stats([](SessionStats& s) { ++s.snapshots_sent; });
   const std::size_t chunk = std::max<std::size_t>(1024, options_.snapshot_chunk_bytes);
-  for (const PeerId peer : std::exchange(snapshot_askers_, {})) {
-    if (!membership_.contains(peer)) continue;  // left while it was encoded
-    host_.update_stats([](SessionStats& st) { ++st.snapshots_sent; });
-    for (std::size_t offset = 0; offset < s->bytes.size(); offset += chunk) {
-      const std::size_t n = std::min(chunk, s->bytes.size() - offset);
-      send_to_peer(peer, snapshot_chunk_message(header(), s->version, s->chain, offset,
-                                                s->bytes.size(), {s->bytes.data() + offset, n}));
-    }
+  for (std::size_t offset = 0; offset < bytes.size(); offset += chunk) {
+    const std::size_t n = std::min(chunk, bytes.size() - offset);
+    send_to_peer(
+        peer, snapshot_chunk_message(header(), replication_.version(), replication_.chain(), offset,
+                                     bytes.size(), {bytes.data() + offset, n}));
   }
 }
 

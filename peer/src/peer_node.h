@@ -127,13 +127,7 @@ class PeerNode {
                         Clock::time_point now);
   void request_snapshot(PeerId from);
   bool snapshot_flowing(Clock::time_point now) const;
-  /// Answers `peer`'s request with a snapshot of our version, encoded beside the network
-  /// thread; members that ask while one is encoded get that one.
   void send_snapshot(PeerId peer);
-  void encode_snapshot_answer();
-  /// Sends the encoded snapshot, once it is, to the members that asked (encoded again if our
-  /// state left its branch meanwhile).
-  void finish_snapshot_answer();
 
   // the journal (peer_node_journal.cpp): one call per event; a failure is reported and ends
   // journaling, never the session
@@ -243,14 +237,6 @@ class PeerNode {
     std::string journal_error;  ///< why that failed (journaling then stops)
   };
   BackgroundTask<LoadedSnapshot> snapshot_loader_{[this] { transport_.wake(); }};
-  /// Our mesh's snapshot for the members that asked for one (snapshot_askers_), encoded from a
-  /// copy: at millions of faces encoding takes a good part of a second.
-  struct EncodedSnapshot {
-    Bytes bytes;
-    std::uint64_t version = 0, chain = 0;
-  };
-  BackgroundTask<EncodedSnapshot> snapshot_encoder_{[this] { transport_.wake(); }};
-  std::vector<PeerId> snapshot_askers_;
   /// A journal compaction's snapshot, encoded and written synced; its result is its version.
   BackgroundTask<std::uint64_t> compaction_writer_{[this] { transport_.wake(); }};
 
