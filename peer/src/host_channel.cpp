@@ -95,12 +95,24 @@ void HostChannel::set_frame_and_attribution(const MergeFrame& frame,
   attribution_ = std::move(attribution);
 }
 
-Snapshot HostChannel::snapshot_of(const Mesh& mesh, const ChainHistory& chains) const {
-  Snapshot snap{mesh, {}, {}, chains};
+Snapshot HostChannel::frame_and_attribution() const {
+  Snapshot snap;
   std::lock_guard lock(mutex_);
   snap.frame = frame_;
   snap.attribution = attribution_;
   return snap;
+}
+
+Bytes HostChannel::encode_snapshot_of(const Mesh& mesh, const ChainHistory& chains) const {
+  const Snapshot s = frame_and_attribution();
+  return encode_snapshot(mesh, s.frame, s.attribution, chains);
+}
+
+Snapshot HostChannel::snapshot_of(const Mesh& mesh, const ChainHistory& chains) const {
+  Snapshot s = frame_and_attribution();
+  s.mesh = mesh;
+  s.chains = chains;
+  return s;
 }
 
 void HostChannel::set_hierarchy(std::shared_ptr<const Hierarchy> hierarchy) {

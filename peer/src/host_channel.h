@@ -103,8 +103,10 @@ class HostChannel {
   /// A snapshot's merge frame and attribution, replacing ours.
   void set_frame_and_attribution(const MergeFrame& frame,
                                  std::map<PeerId, std::vector<float>> attribution);
-  /// A snapshot of `mesh` with our frame and attribution, and `chains`: copies, so that it is
-  /// encoded without holding the host's lock, or beside the network thread.
+  /// The bytes of a snapshot of `mesh` with our frame and attribution (copied, so that the
+  /// encoding does not hold the host's lock), and `chains`.
+  Bytes encode_snapshot_of(const Mesh& mesh, const ChainHistory& chains) const;
+  /// The same, unencoded and with a copy of `mesh`: to be encoded beside the network thread.
   Snapshot snapshot_of(const Mesh& mesh, const ChainHistory& chains) const;
 
   void set_hierarchy(std::shared_ptr<const Hierarchy> hierarchy);
@@ -117,6 +119,8 @@ class HostChannel {
   bool wait_joined(Millis timeout);
 
  private:
+  /// A snapshot without a mesh: our frame and attribution, copied under the lock.
+  Snapshot frame_and_attribution() const;
   mutable std::mutex mutex_;
   std::condition_variable joined_cv_;  // wait_joined() sleeps on it
   bool joined_ = false;

@@ -597,8 +597,7 @@ bool PeerNode::snapshot_flowing(Clock::time_point now) const {
 
 void PeerNode::send_snapshot(PeerId peer) {
   if (!joined_) return;
-  const Bytes bytes =
-      encode_snapshot(host_.snapshot_of(base_, replication_.recent_chains(kChainsSent)));
+  const Bytes bytes = host_.encode_snapshot_of(base_, replication_.recent_chains(kChainsSent));
   host_.update_stats([](SessionStats& s) { ++s.snapshots_sent; });
   const std::size_t chunk = std::max<std::size_t>(1024, options_.snapshot_chunk_bytes);
   for (std::size_t offset = 0; offset < bytes.size(); offset += chunk) {

@@ -50,7 +50,7 @@ void PeerNode::create_journal() {
 /// A snapshot of our version and a fresh log after it.
 void PeerNode::snapshot_into(Journal& j) {
   // With the chains before it, so a resumed peer still finds where another branch forked.
-  j.reset(encode_snapshot(host_.snapshot_of(base_, replication_.recent_chains(kChainsSent))),
+  j.reset(host_.encode_snapshot_of(base_, replication_.recent_chains(kChainsSent)),
           replication_.version(), replication_.chain());
   host_.update_stats([](SessionStats& s) { ++s.journal_snapshots; });
 }

@@ -427,18 +427,18 @@ double sideways(const Vec3d& d, const Vec3d& n, double edge) {
   return (all - along * along) / all;
 }
 
-/// How much diff i stretches the one ring of the listed vertex `at` (base normal n): twice the mean
-/// squared relative change of its edges' lengths (a stretch by s along one direction gives about (s
-/// - 1)^2, its share of |F - I|^2 for F the deformation gradient). A detail that moves the surface
-/// sideways (a pinch, a small grab) hardly turns it but squeezes and shears it; by its turn alone
-/// it passed for the coarser edit under a Cast, a taper or a twist.
+/// How much diff i stretches the one ring of the listed vertex `at` (base normal n): twice the
+/// mean squared relative change of its edges' lengths (a stretch by s along one direction gives
+/// about (s - 1)^2, its share of |F - I|^2 for F the deformation gradient). A detail that moves
+/// the surface sideways (a pinch, a small grab) hardly turns it but squeezes and shears it; by
+/// its turn alone it passed for the coarser edit under a Cast, a taper or a twist.
 ///
 /// The ring's even change (its mean) counts only as far as the vertex moves sideways: a lift
 /// h along the normals of a surface of radius r grows every ring by h / r, the curvature's
-/// doing and not a fine edit (a Wave over a head read finer than a swirl in it and was carried
-/// by it). A lift's fineness is in its slope, which its turns measure. A pinch, which moves
-/// the vertex sideways, keeps its even squeeze. A rigid motion changes no length, so whatever
-/// its direction it adds nothing.
+/// doing and not a fine edit (read as one, a Wave over a head passed for finer than a swirl in
+/// it). A lift's fineness is in its slope, which its turns measure. A pinch, which moves the
+/// vertex sideways, keeps its even squeeze. A rigid motion changes no length, so whatever its
+/// direction it adds nothing.
 double Transport::ring_stretch(std::size_t at, std::size_t i, const Vec3d& n) const {
   const std::uint32_t v = vertices_[at];
   const Vec3d b = widen(base_[v]), e = edited_position(i, v);
