@@ -95,6 +95,7 @@ class MergeMethod(enum.IntEnum):
     SUM = 6
     PAPER_BLEND = 7
     HIERARCHY_BLEND = 8
+    FRAME_TRANSPORT = 9
     METHOD_MAX_ENUM = 0x7FFFFFFF
 
 

@@ -25,6 +25,7 @@ constexpr MethodName kMethods[] = {
     {CSC_MERGE_SUM, csculpt::MergeMethod::sum},
     {CSC_MERGE_PAPER_BLEND, csculpt::MergeMethod::paper_blend},
     {CSC_MERGE_HIERARCHY_BLEND, csculpt::MergeMethod::hierarchy_blend},
+    {CSC_MERGE_FRAME_TRANSPORT, csculpt::MergeMethod::frame_transport},
 };
 const MethodName* find_method(csc_merge_method m) {
   for (const MethodName& n : kMethods)

@@ -17,6 +17,11 @@ constexpr std::uint32_t kNoSeam = 0xffffffffu;
 constexpr double kSmoothSpread = 30.0 * 3.14159265358979323846 / 180.0;
 constexpr double kFoldSpread = 90.0 * 3.14159265358979323846 / 180.0;
 constexpr std::size_t kMaxUsers = 64;
+/// How far from the stacked reading of a carried detail the merge may keep it, in multiples
+/// of addition's distance from that reading (frame_transport.h, the hedge). Above 1, so that
+/// the result is always nearer the frame's reading than addition; below the 1.5 the
+/// stacked ideal's rule allows, for the error of the fitted Jacobian.
+constexpr double kStackReach = 1.2;
 
 /// A quaternion in double, for the faces' turns summed around a vertex.
 struct Vec4d {
@@ -63,6 +68,10 @@ class Transport {
         n_(users.size()),
         same_once_(same_once) {}
 
+  /// Fits the regional Jacobians of the diffs with carries[i] around the carried vertices.
+  void fit_jacobians(const JacobianSamples& samples, std::span<const bool> carries,
+                     WorkerPool& pool);
+
   void find_seams();
   void share_normals();
   void share_agreements();
@@ -82,6 +91,7 @@ class Transport {
   std::size_t sole_mover(std::size_t at) const;
   Vec3f lone_edit(std::size_t at, std::size_t i) const;
   Vec3f transported(std::size_t at, const VertexState& s) const;
+  double jacobian(std::size_t at, std::size_t i, Mat3d& a) const;
   std::uint32_t group_coincident();
   void share_rotations(std::uint32_t groups);
   Quat rotation(std::size_t at, std::size_t i) const;
@@ -100,7 +110,8 @@ class Transport {
   std::span<const TransportInput> users_;
   TransportScratch& scratch_;
   std::size_t n_;
-  bool same_once_;  ///< false: s = 0 (SameChange::add)
+  bool same_once_;       ///< false: s = 0 (SameChange::add)
+  bool hedged_ = false;  ///< the Jacobians are fitted: carried details are hedged
   double same(const VertexState& s, std::size_t i, std::size_t j) const;
 };
 
@@ -535,18 +546,38 @@ Vec3f Transport::lone_edit(std::size_t at, std::size_t i) const {
   return result;
 }
 
+/// Diff i's regional Jacobian at the listed vertex `at` into `a`; returns how much the fitted
+/// samples around it vouch for it (0: none, a = I).
+double Transport::jacobian(std::size_t at, std::size_t i, Mat3d& a) const {
+  return scratch_.jacobians.at(widen(base_[vertices_[at]]), i, a);
+}
+
+/// The carried displacement between the frame's reading `carried` and the stack's `stacked`
+/// of displacement d (frame_transport.h, the hedge), as far toward the stack's as the
+/// fitted Jacobians vouch for it.
+Vec3d hedge(const Vec3d& d, const Vec3d& carried, const Vec3d& stacked, double vouched) {
+  const double apart = length(sub(carried, stacked));
+  if (!(apart > 0) || !(vouched > 0)) return carried;
+  const double a = std::clamp(1 - kStackReach * length(sub(d, stacked)) / apart, 0.0, 1.0);
+  return add(carried, scale(sub(stacked, carried), vouched * a));
+}
+
 /// The formula (frame_transport.h) at the listed vertex `at`, its state loaded in `s`.
 Vec3f Transport::transported(std::size_t at, const VertexState& s) const {
   Vec3d sum{};
-  std::array<double, kMaxUsers> agrees;  // per carrier, once it carries anything here
+  std::array<double, kMaxUsers> agrees;   // per carrier, once it carries anything here
+  std::array<double, kMaxUsers> vouches;  // per carrier, once its Jacobian is read here
+  std::array<Mat3d, kMaxUsers> jacobians;
   std::fill_n(agrees.begin(), n_, -1.0);
+  std::fill_n(vouches.begin(), n_, -1.0);
   for (std::size_t j = 0; j < n_; ++j) {
     if (!s.moves[j]) continue;
     double count = 1;
     for (std::size_t k = 0; k < n_; ++k)
       if (k != j && s.moves[k]) count += same(s, j, k);
-    Vec3d carried = s.d[j];
+    Vec3d carried = s.d[j], stacked = s.d[j];
     double level = -1;  // read once some diff carries d_j here
+    double vouched = 1;
     for (std::size_t i = n_; i-- > 0;) {
       if (i == j || !s.turns[i]) continue;
       double g = (1.0 - same(s, i, j)) * scratch_.weight[i * n_ + j];
@@ -557,18 +588,41 @@ Vec3f Transport::transported(std::size_t at, const VertexState& s) const {
       if (level < 0) level = carrying_level(s.size[j], scratch_.edge[at]);
       const Quat frame = carrier(at, i, level);
       carried = add(carried, scale(rotation_change(swing(frame, scratch_.normal[at]), carried), g));
+      if (!hedged_) continue;
+      if (vouches[i] < 0) vouches[i] = jacobian(at, i, jacobians[i]);
+      vouched = std::min(vouched, vouches[i]);
+      stacked = add(stacked, scale(sub(apply(jacobians[i], stacked), stacked), g));
     }
+    if (hedged_ && level >= 0) carried = hedge(s.d[j], carried, stacked, vouched);
     sum = add(sum, count == 1 ? carried : scale(carried, 1.0 / count));
   }
   return narrow(add(widen(base_[vertices_[at]]), sum));
+}
+
+/// Fits the Jacobians of the carrying diffs at the samples near the vertices they may carry
+/// at, from each diff's displacement and the base normals there.
+void Transport::fit_jacobians(const JacobianSamples& samples, std::span<const bool> carries,
+                              WorkerPool& pool) {
+  RegionalJacobians& jacobians = scratch_.jacobians;
+  jacobians.prepare(base_, samples, n_);
+  if (!jacobians.ready()) return;
+  for (std::size_t at = 0; at < vertices_.size(); ++at)
+    if (scratch_.carried_here[at]) jacobians.need(widen(base_[vertices_[at]]));
+  for (std::size_t i = 0; i < n_; ++i) {
+    if (!carries[i]) continue;
+    jacobians.fit(
+        i, [&](std::uint32_t v) { return sub(edited_position(i, v), widen(base_[v])); },
+        [&](std::uint32_t v) { return base_normal(v); }, pool);
+  }
+  hedged_ = true;
 }
 
 }  // namespace
 
 void transport_positions(
     const Topology& topology, std::span<const Vec3f> base, std::span<const std::uint32_t> vertices,
-    std::span<const TransportInput> users, bool same_once, TransportScratch& scratch,
-    WorkerPool& pool, std::size_t grain,
+    std::span<const TransportInput> users, bool same_once, const JacobianSamples& samples,
+    TransportScratch& scratch, WorkerPool& pool, std::size_t grain,
     const std::function<void(std::span<const bool>, std::span<const std::uint8_t>)>& carriers,
     std::span<Vec3f> moved) {
   Transport t(topology, base, vertices, users, same_once, scratch);
@@ -592,6 +646,7 @@ void transport_positions(
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t j = 0; j < n; ++j) carries[i] = carries[i] || scratch.weight[i * n + j] > 0;
   carriers(std::span<const bool>(carries.data(), n), scratch.reads_level);
+  t.fit_jacobians(samples, std::span<const bool>(carries.data(), n), pool);
   pool.for_chunks(vertices.size(), grain, [&](std::size_t begin, std::size_t end) {
     VertexState s;
     for (std::size_t at = begin; at < end; ++at) moved[at] = t.merged(at, s);

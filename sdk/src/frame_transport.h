@@ -45,6 +45,19 @@
 //   on a 275-piece house. A bend's or twist's faces turn alike and carry as before.
 // - Coincident vertices that are not connected (split seams) share one rotation per diff,
 //   so a seam that the artists moved together stays closed.
+// - The hedge between the two readings of a coarse edit. The frames above read it as a turn
+//   of the surface, and a detail keeps its height along the new normals (ideal_frame). A
+//   volumetric deformer moves the detail by its Jacobian J instead (the stacked ideal): a
+//   taper's side keeps the detail's direction and shrinks it, a Cast tilts it against the
+//   surface's turn. J is fitted from the carrier's displacement over the curved region
+//   around v (regional_jacobian.h); with x = T_j d_j (the frame's reading) and
+//   y = prod (I + g_ij (J_i - I)) d_j (the stack's), the carried displacement is the point
+//   of the segment x..y nearest x within kStackReach |d_j - y| of y:
+//     x + a (y - x),  a = clamp(1 - kStackReach |d_j - y| / |x - y|, 0, 1).
+//   As |x - d_j| <= |x - y| + |y - d_j|, that point is nearer the frame's reading than
+//   addition is whenever kStackReach > 1, and it is never further than kStackReach times
+//   addition's distance from the stack's. Where the readings agree (bends, twists: J turns
+//   the detail as the surface turns) a is 0 and the frames carry alone.
 // Products and sums run in the canonical order of the diffs, per vertex in double, and the
 // sums E in fixed chunks added in order: the result is bit-identical for any diff order,
 // thread count or SIMD width.
@@ -59,6 +72,7 @@
 #include "csculpt/dual_quat.h"
 #include "csculpt/hierarchy.h"
 #include "csculpt/vec3.h"
+#include "regional_jacobian.h"
 #include "worker_pool.h"
 
 namespace csculpt::detail {
@@ -102,6 +116,8 @@ struct TransportScratch {
   /// Per vertex: bit l set when a displacement there reads carrying level l (all clear
   /// between merges).
   std::vector<std::uint8_t> reads_level;
+  /// The carriers' regional Jacobians, for the stacked reading of what they carry.
+  RegionalJacobians jacobians;
 };
 
 /// Merged positions of the vertices in `vertices` (increasing: the union of the changed
@@ -110,10 +126,13 @@ struct TransportScratch {
 /// `carriers(carries, reads_level)`, once the weights are known and before any position is
 /// merged, sets `smoothed` of each input i with carries[i] (it carries another diff
 /// somewhere); level l is read only at the vertices v with bit l of reads_level[v].
+/// `samples` with a radius: each carried displacement is kept within kStackReach times
+/// addition's distance of how the carrier's regional Jacobian would move it (the hedge
+/// above); without one, the frames alone carry.
 void transport_positions(
     const Topology& topology, std::span<const Vec3f> base, std::span<const std::uint32_t> vertices,
-    std::span<const TransportInput> users, bool same_once, TransportScratch& scratch,
-    WorkerPool& pool, std::size_t grain,
+    std::span<const TransportInput> users, bool same_once, const JacobianSamples& samples,
+    TransportScratch& scratch, WorkerPool& pool, std::size_t grain,
     const std::function<void(std::span<const bool>, std::span<const std::uint8_t>)>& carriers,
     std::span<Vec3f> moved);
 

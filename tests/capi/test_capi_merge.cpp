@@ -21,7 +21,7 @@ using namespace capi_test;
 
 TEST(CapiMergeMethods, NamesRoundTripAndUnknownValuesAreRefused) {
   std::vector<std::string> names;
-  for (int m = CSC_MERGE_FULL; m <= CSC_MERGE_PAPER_BLEND; ++m) {
+  for (int m = CSC_MERGE_FULL; m <= CSC_MERGE_FRAME_TRANSPORT; ++m) {
     const char* name = csc_merge_method_name(static_cast<csc_merge_method>(m));
     ASSERT_NE(name, nullptr) << m;
     names.emplace_back(name);
@@ -33,7 +33,7 @@ TEST(CapiMergeMethods, NamesRoundTripAndUnknownValuesAreRefused) {
   EXPECT_EQ(names[1], "single-parent");
   std::sort(names.begin(), names.end());
   EXPECT_EQ(std::unique(names.begin(), names.end()), names.end());
-  for (std::int64_t m : {9LL, 99LL, 0x7FFFFFFFLL})
+  for (std::int64_t m : {10LL, 99LL, 0x7FFFFFFFLL})
     EXPECT_EQ(csc_merge_method_name(static_cast<csc_merge_method>(m)), nullptr) << m;
 
   csc_merge_method out = CSC_MERGE_SUM;
@@ -91,7 +91,7 @@ TEST_F(CapiEveryHandle, MergeBadArguments) {
   o.struct_size = 0;
   EXPECT_FAILS(csc_merger_merge(merger.get(), &out, mesh.get(), one, 1, &o),
                CSC_ERROR_INVALID_ARGUMENT, "struct_size");
-  for (std::int64_t m : {9LL, 99LL, 0x7FFFFFFFLL}) {
+  for (std::int64_t m : {10LL, 99LL, 0x7FFFFFFFLL}) {
     o = CSC_MERGE_OPTIONS_INIT;
     o.method = static_cast<csc_merge_method>(m);
     EXPECT_FAILS(csc_merger_merge(merger.get(), &out, mesh.get(), one, 1, &o),

@@ -3,14 +3,16 @@
 
 usage: table.py SCORER CSCULPT_BIN CASES_DIR [CASES_DIR ...]
 Runs the scorer as check_eval.py does and prints one row per case: rel_err against the frame
-ideal and the stacked one for full, hierarchy-blend (the previous full), sum and
-weighted-translation, and the new folds of full / hierarchy-blend / sum."""
+ideal and the stacked one for full, frame-transport (full before the hedge toward the stacked
+reading), hierarchy-blend (full before frame transport), sum and weighted-translation, and the
+new folds of full / frame-transport / hierarchy-blend / sum."""
 import os
 import sys
 
 import check_eval
 
-COLUMNS = ["full", "hierarchy-blend", "(sum)", "(weighted-translation)"]
+COLUMNS = ["full", "frame-transport", "hierarchy-blend", "(sum)", "(weighted-translation)"]
+STACKED = 4  # the first columns, also scored against the stacked ideal and for folds
 
 
 def cell(results, row, method, kind):
@@ -27,13 +29,14 @@ def main():
         cases += sorted(c for c in os.listdir(d) if os.path.isfile(os.path.join(d, c, "base.ply")))
     names = [c.strip("()") for c in COLUMNS]
     print("| case | " + " | ".join(n + " (frame)" for n in names) + " | " +
-          " | ".join(n + " (stack)" for n in names[:3]) + " | new folds: full / hierarchy-blend / sum |")
-    print("|---" * (2 + len(COLUMNS) + 3) + "|")
+          " | ".join(n + " (stack)" for n in names[:STACKED]) + " | new folds: " +
+          " / ".join(names[:STACKED]) + " |")
+    print("|---" * (2 + len(COLUMNS) + STACKED) + "|")
     for case in sorted(cases):
         frame = [cell(results, case + "/frame", m, "rel_err") for m in COLUMNS]
         kind = "rel_err" if results.get(case, {}).get("full", {}).get("rel_err") is not None else "roughness"
-        stack = [cell(results, case, m, kind) for m in COLUMNS[:3]]
-        folds = " / ".join(cell(results, case + "/folds", m, "new_folds") for m in COLUMNS[:3])
+        stack = [cell(results, case, m, kind) for m in COLUMNS[:STACKED]]
+        folds = " / ".join(cell(results, case + "/folds", m, "new_folds") for m in COLUMNS[:STACKED])
         label = case if kind == "rel_err" else case + " (roughness)"
         print("| %s | %s | %s | %s |" % (label, " | ".join(frame), " | ".join(stack), folds))
 

@@ -161,7 +161,7 @@ class Enums(unittest.TestCase):
     def test_merge_method_names_round_trip(self):
         names = csculpt.merge_method_names()
         self.assertEqual(names["full"], csculpt.MergeMethod.FULL)
-        self.assertEqual(len(names), 9)
+        self.assertEqual(len(names), 10)
         for name, method in names.items():
             self.assertEqual(csculpt._merge_method(name), method)
 

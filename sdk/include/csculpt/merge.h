@@ -20,7 +20,8 @@ namespace csculpt {
 /// The paper's algorithm and the variants it is compared with (Fig. 3, Fig. 5).
 enum class MergeMethod : std::uint32_t {
   /// isometries: each artist's displacement carried in the frames the other artists' edits
-  /// give the surface (a detail turns and follows a coarse edit at its own height), each
+  /// give the surface (a detail turns and follows a coarse edit at its own height), hedged
+  /// toward how a volumetric deformer would move it where the two readings differ, each
   /// intent counted once; exact where one artist acted (docs/merge-quality.md)
   full = 0,
   single_parent = 1,           ///< isometries, multiscale, a tree (K = 1)
@@ -35,6 +36,9 @@ enum class MergeMethod : std::uint32_t {
   /// the previous `full`: isometries, multiscale, K blended parents; residuals blended per
   /// node by magnitude and counted once per intent, recomposed coarse to fine
   hierarchy_blend = 8,
+  /// `full` without the hedge toward the stacked reading: details ride the surface's turn
+  /// alone (nearest the frame ideal; under a volumetric taper or Cast, further from the stack)
+  frame_transport = 9,
 };
 
 /// The most diffs one merge takes (the C ABI's CSC_MAX_MERGE_DIFFS).
