@@ -529,7 +529,8 @@ constexpr std::size_t kBlendGrain = 512;
 /// The carriers' regional Jacobians (regional_jacobian.h): about this many samples over the
 /// mesh, and a fitting radius of this share of their bounding box diagonal (a region curved
 /// enough to show the normal column, small enough that a coarse deformer is about affine over
-/// it: 0.05 misread a four-artist case on the torus, 0.1 and 0.15 none).
+/// it: in a numpy sketch of the fit, 0.05 misread a four-artist case on the torus, 0.1 and
+/// 0.15 none).
 constexpr std::uint32_t kJacobianSamples = 2048;
 constexpr double kJacobianRadius = 0.1;
 

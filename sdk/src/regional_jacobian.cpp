@@ -6,9 +6,12 @@
 namespace csculpt::detail {
 namespace {
 
-/// The share of the covariance's trace by which the fit is pulled toward its prior: enough
-/// to fix the normal column of a flat region, too little to bend a curved one's.
+/// The share of the covariance's trace by which the fit's normal column is pulled toward its
+/// prior: enough to fix a flat region's, too little to bend a curved one's.
 constexpr double kRidge = 1e-3;
+/// The least determinant of the ridged covariance, relative to its trace cubed, that fixes a
+/// Jacobian (a plane's is 2.5e-4 of it; samples along a line give next to none).
+constexpr double kConditioning = 1e-6;
 /// Samples interpolate the fitted Jacobians within this share of the fitting radius.
 constexpr double kReadReach = 0.5;
 constexpr std::int64_t kCellBias = 1 << 20;
@@ -17,6 +20,11 @@ constexpr std::int64_t kCellBias = 1 << 20;
 struct Sym3 {
   double xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
 };
+
+double determinant(const Sym3& s) {
+  return s.xx * (s.yy * s.zz - s.yz * s.yz) - s.xy * (s.xy * s.zz - s.xz * s.yz) +
+         s.xz * (s.xy * s.yz - s.xz * s.yy);
+}
 
 /// x = S^-1 b for the columns of b (row-major 3 x 3); NaN where S is singular.
 Mat3d solve(const Sym3& s, const Mat3d& b) {
@@ -192,8 +200,12 @@ Mat3d RegionalJacobians::fit_site(std::size_t s, const Vec3d& n) const {
   const double trace = cov.xx + cov.yy + cov.zz;
   // Samples along a line or at one point cannot fix a Jacobian.
   if (!(trace > 1e-6 * r2)) return none;
+  // The ridge acts on the normal direction only, so the tangent columns stay as measured.
   const double l = kRidge * trace;
-  cov.xx += l, cov.yy += l, cov.zz += l;
+  cov.xx += l * n.x * n.x, cov.xy += l * n.x * n.y, cov.xz += l * n.x * n.z;
+  cov.yy += l * n.y * n.y, cov.yz += l * n.y * n.z, cov.zz += l * n.z * n.z;
+  // Samples about a line (a thin part seen edge on) leave a tangent column unfixed.
+  if (!(determinant(cov) > kConditioning * trace * trace * trace)) return none;
   auto jacobian = [](const Mat3d& g) {  // I + G^T
     Mat3d a;
     for (int r = 0; r < 3; ++r)
