@@ -64,7 +64,7 @@ std::uint64_t mix(std::uint64_t key) {
 }  // namespace
 
 std::int64_t RegionalJacobians::axis_cell(double x) const {
-  return static_cast<std::int64_t>(std::floor(x / radius_));
+  return static_cast<std::int64_t>(std::floor(x / cell_));
 }
 
 std::uint64_t RegionalJacobians::key_of(std::int64_t x, std::int64_t y, std::int64_t z) {
@@ -72,41 +72,49 @@ std::uint64_t RegionalJacobians::key_of(std::int64_t x, std::int64_t y, std::int
   return field(x) << 42 | field(y) << 21 | field(z);
 }
 
+std::uint64_t RegionalJacobians::key_at(const Vec3d& p) const {
+  const Vec3d q = sub(p, origin_);
+  return key_of(axis_cell(q.x), axis_cell(q.y), axis_cell(q.z));
+}
+
 std::pair<std::uint32_t, std::uint32_t> RegionalJacobians::cell(std::uint64_t key) const {
   const std::size_t mask = table_.size() - 1;
-  for (std::size_t h = mix(key) & mask; table_[h] != 0; h = (h + 1) & mask) {
-    std::uint32_t begin = table_[h] - 1;
-    if (cells_[begin].first != key) continue;
-    std::uint32_t end = begin;
-    while (end < cells_.size() && cells_[end].first == key) ++end;
-    return {begin, end};
-  }
+  for (std::size_t h = mix(key) & mask; table_[h].end != 0; h = (h + 1) & mask)
+    if (table_[h].key == key) return {table_[h].begin, table_[h].end};
   return {0, 0};
 }
 
 void RegionalJacobians::prepare(std::span<const Vec3f> base, const JacobianSamples& samples,
                                 std::size_t users) {
   radius_ = samples.radius;
+  cell_ = kReadReach * radius_;
   users_ = users;
   site_.clear();
-  cells_.clear();
+  keyed_.clear();
   needed_list_.clear();
   if (!(radius_ > 0) || samples.vertices.empty()) return;
   origin_ = widen(base[samples.vertices[0]]);
-  for (const std::uint32_t v : samples.vertices) site_.push_back({widen(base[v]), v});
-  for (std::uint32_t s = 0; s < site_.size(); ++s) {
-    const Vec3d q = sub(site_[s].p, origin_);
-    cells_.emplace_back(key_of(axis_cell(q.x), axis_cell(q.y), axis_cell(q.z)), s);
+  for (const std::uint32_t v : samples.vertices) {
+    const Site s{widen(base[v]), v};
+    keyed_.emplace_back(key_at(s.p), s);
   }
-  std::sort(cells_.begin(), cells_.end());
+  std::sort(keyed_.begin(), keyed_.end(), [](const auto& a, const auto& b) {
+    return a.first != b.first ? a.first < b.first : a.second.vertex < b.second.vertex;
+  });
   std::size_t size = 64;
-  while (size < 2 * cells_.size()) size *= 2;
-  table_.assign(size, 0);
-  for (std::size_t k = 0; k < cells_.size(); ++k) {
-    if (k > 0 && cells_[k].first == cells_[k - 1].first) continue;
-    std::size_t h = mix(cells_[k].first) & (size - 1);
-    while (table_[h] != 0) h = (h + 1) & (size - 1);
-    table_[h] = static_cast<std::uint32_t>(k + 1);
+  while (size < 2 * keyed_.size()) size *= 2;
+  table_.assign(size, Cell{});
+  std::size_t slot = 0;  // the table's slot of the cell being filled
+  for (std::uint32_t k = 0; k < keyed_.size(); ++k) {
+    site_.push_back(keyed_[k].second);
+    if (k > 0 && keyed_[k].first == keyed_[k - 1].first) {
+      ++table_[slot].end;
+      continue;
+    }
+    std::size_t h = mix(keyed_[k].first) & (size - 1);
+    while (table_[h].end != 0) h = (h + 1) & (size - 1);
+    table_[h] = {keyed_[k].first, k, k + 1};
+    slot = h;
   }
   needed_.assign(site_.size(), 0);
   last_needed_ = ~std::uint64_t{0};
@@ -115,8 +123,8 @@ void RegionalJacobians::prepare(std::span<const Vec3f> base, const JacobianSampl
   ok_.assign(users * site_.size(), 0);
 }
 
-/// Calls visit(site, squared distance) for the sites within `reach` of p, cell by cell in
-/// key order and by site within a cell (a fixed order: the sums are bit-identical).
+/// Calls visit(site, squared distance) for the sites within `reach` of p, cell by cell along
+/// x, y, z and by site within a cell: a fixed order, so the sums are bit-identical.
 template <class Visit>
 void RegionalJacobians::near(const Vec3d& p, double reach, const Visit& visit) const {
   const double r2 = reach * reach;
@@ -128,8 +136,7 @@ void RegionalJacobians::near(const Vec3d& p, double reach, const Visit& visit) c
     for (std::int64_t y = y0; y <= y1; ++y)
       for (std::int64_t z = z0; z <= z1; ++z) {
         const auto [begin, end] = cell(key_of(x, y, z));
-        for (std::uint32_t k = begin; k < end; ++k) {
-          const std::uint32_t s = cells_[k].second;
+        for (std::uint32_t s = begin; s < end; ++s) {
           const Vec3d d = sub(site_[s].p, p);
           const double d2 = dot(d, d);
           if (d2 < r2) visit(s, d2);
@@ -147,14 +154,14 @@ void RegionalJacobians::need(const Vec3d& p) {
   last_needed_ = key;
   const double reach = kReadReach * radius_;
   const Vec3d lo =
-      add(origin_, Vec3d{static_cast<double>(x) * radius_, static_cast<double>(y) * radius_,
-                         static_cast<double>(z) * radius_});
-  const Vec3d middle = add(lo, Vec3d{radius_ / 2, radius_ / 2, radius_ / 2});
+      add(origin_, Vec3d{static_cast<double>(x) * cell_, static_cast<double>(y) * cell_,
+                         static_cast<double>(z) * cell_});
+  const Vec3d middle = add(lo, Vec3d{cell_ / 2, cell_ / 2, cell_ / 2});
   // a point within reach of the cell is within reach + half its diagonal of its middle
-  near(middle, radius_ * 0.8660254037844386 + reach, [&](std::uint32_t s, double) {
+  near(middle, cell_ * 0.8660254037844386 + reach, [&](std::uint32_t s, double) {
     if (needed_[s]) return;
     const Vec3d d = sub(site_[s].p, lo);
-    auto outside = [this](double t) { return t < 0 ? -t : (t > radius_ ? t - radius_ : 0.0); };
+    auto outside = [this](double t) { return t < 0 ? -t : (t > cell_ ? t - cell_ : 0.0); };
     const double dx = outside(d.x), dy = outside(d.y), dz = outside(d.z);
     if (dx * dx + dy * dy + dz * dz >= reach * reach) return;
     needed_[s] = 1;
@@ -232,7 +239,7 @@ double RegionalJacobians::at(const Vec3d& p, std::size_t user, Mat3d& a) const {
     for (int k = 0; k < 9; ++k) sum.m[k] += w * fitted_[offset + s].m[k];
   });
   if (!(w_sum > 0)) {
-    a = Mat3d{};
+    a = kIdentity3;
     return 0.0;
   }
   for (int k = 0; k < 9; ++k) a.m[k] = sum.m[k] / w_sum;

@@ -28,10 +28,13 @@
 
 namespace csculpt::detail {
 
-/// A 3 x 3 matrix in double, row-major.
+/// A 3 x 3 matrix in double, row-major. Left uninitialised by default: the transport keeps
+/// one per diff for every vertex it merges.
 struct Mat3d {
-  std::array<double, 9> m{1, 0, 0, 0, 1, 0, 0, 0, 1};
+  std::array<double, 9> m;
 };
+
+inline constexpr Mat3d kIdentity3{{1, 0, 0, 0, 1, 0, 0, 0, 1}};
 
 inline Vec3d apply(const Mat3d& a, const Vec3d& v) {
   return {a.m[0] * v.x + a.m[1] * v.y + a.m[2] * v.z, a.m[3] * v.x + a.m[4] * v.y + a.m[5] * v.z,
@@ -46,7 +49,7 @@ struct JacobianSamples {
 
 class RegionalJacobians {
  public:
-  /// Sorts the samples into cells of the radius; clears what the last merge fitted.
+  /// Sorts the samples into cells of the read reach; clears what the last merge fitted.
   void prepare(std::span<const Vec3f> base, const JacobianSamples& samples, std::size_t users);
   bool ready() const { return radius_ > 0 && !site_.empty(); }
   /// Marks the samples that a vertex at base position `p` reads.
@@ -65,21 +68,28 @@ class RegionalJacobians {
     Vec3d p;
     std::uint32_t vertex = 0;
   };
+  /// A cell of the grid: its key and its samples, site_[begin, end); end == 0 marks a free
+  /// slot of the table.
+  struct Cell {
+    std::uint64_t key = 0;
+    std::uint32_t begin = 0, end = 0;
+  };
   std::int64_t axis_cell(double x) const;
   static std::uint64_t key_of(std::int64_t x, std::int64_t y, std::int64_t z);
-  /// The samples of the cell with `key`, as a range of cells_.
+  std::uint64_t key_at(const Vec3d& p) const;
+  /// The samples of the cell with `key`, as a range of site_.
   std::pair<std::uint32_t, std::uint32_t> cell(std::uint64_t key) const;
   template <class Visit>
   void near(const Vec3d& p, double reach, const Visit& visit) const;
   Mat3d fit_site(std::size_t s, const Vec3d& n) const;
 
   double radius_ = 0;
+  double cell_ = 0;  ///< the grid's cell: the reach of a read, so that one visits few samples
   Vec3d origin_{};
-  std::vector<Site> site_;
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> cells_;  ///< (cell, site), sorted
-  /// Open addressing by cell key: 1 + the index in cells_ where the cell's samples begin.
-  std::vector<std::uint32_t> table_;
-  std::vector<std::uint8_t> needed_;  ///< per site
+  std::vector<Site> site_;                             ///< sorted by cell key, then by vertex
+  std::vector<std::pair<std::uint64_t, Site>> keyed_;  ///< scratch of prepare()
+  std::vector<Cell> table_;                            ///< open addressing by cell key
+  std::vector<std::uint8_t> needed_;                   ///< per site
   std::vector<std::uint32_t> needed_list_;
   std::uint64_t last_needed_ = ~std::uint64_t{0};  ///< the cell need() marked last
   std::vector<Vec3d> moved_;                       ///< per site: the displacement being fitted
@@ -99,7 +109,7 @@ void RegionalJacobians::fit(std::size_t user, const Displacement& displacement,
       const Mat3d a = fit_site(s, n);
       const bool good =
           std::all_of(a.m.begin(), a.m.end(), [](double x) { return std::isfinite(x); });
-      fitted_[user * site_.size() + s] = good ? a : Mat3d{};
+      fitted_[user * site_.size() + s] = good ? a : kIdentity3;
       ok_[user * site_.size() + s] = good;
     }
   });

@@ -90,7 +90,7 @@ TEST(RegionalJacobian, NoSamplesNearMeansNoReading) {
   const auto u = [](const Vec3d& p) { return scale(p, 0.1); };
   const Fitted f = fit_and_read(sphere, u, 0.3, Vec3d{5, 5, 5});
   EXPECT_EQ(f.vouched, 0.0);
-  EXPECT_EQ(max_difference(f.a, Mat3d{}), 0.0);
+  EXPECT_EQ(max_difference(f.a, kIdentity3), 0.0);
 }
 
 }  // namespace
