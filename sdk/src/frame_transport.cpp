@@ -91,7 +91,6 @@ class Transport {
   std::size_t sole_mover(std::size_t at) const;
   Vec3f lone_edit(std::size_t at, std::size_t i) const;
   Vec3f transported(std::size_t at, const VertexState& s) const;
-  double jacobian(std::size_t at, std::size_t i, Mat3d& a) const;
   std::uint32_t group_coincident();
   void share_rotations(std::uint32_t groups);
   Quat rotation(std::size_t at, std::size_t i) const;
@@ -546,12 +545,6 @@ Vec3f Transport::lone_edit(std::size_t at, std::size_t i) const {
   return result;
 }
 
-/// Diff i's regional Jacobian at the listed vertex `at` into `a`; returns how much the fitted
-/// samples around it vouch for it (0: none, a = I).
-double Transport::jacobian(std::size_t at, std::size_t i, Mat3d& a) const {
-  return scratch_.jacobians.at(widen(base_[vertices_[at]]), i, a);
-}
-
 /// The carried displacement between the frame's reading `carried` and the stack's `stacked`
 /// of displacement d (frame_transport.h, the hedge), as far toward the stack's as the
 /// fitted Jacobians vouch for it.
@@ -568,6 +561,8 @@ Vec3f Transport::transported(std::size_t at, const VertexState& s) const {
   std::array<double, kMaxUsers> agrees;   // per carrier, once it carries anything here
   std::array<double, kMaxUsers> vouches;  // per carrier, once its Jacobian is read here
   std::array<Mat3d, kMaxUsers> jacobians;
+  RegionalJacobians::Reading reading;  // the fitted samples near the vertex, once gathered
+  bool gathered = false;
   std::fill_n(agrees.begin(), n_, -1.0);
   std::fill_n(vouches.begin(), n_, -1.0);
   for (std::size_t j = 0; j < n_; ++j) {
@@ -589,7 +584,11 @@ Vec3f Transport::transported(std::size_t at, const VertexState& s) const {
       const Quat frame = carrier(at, i, level);
       carried = add(carried, scale(rotation_change(swing(frame, scratch_.normal[at]), carried), g));
       if (!hedged_) continue;
-      if (vouches[i] < 0) vouches[i] = jacobian(at, i, jacobians[i]);
+      if (vouches[i] < 0) {
+        if (!gathered) scratch_.jacobians.gather(widen(base_[vertices_[at]]), reading);
+        gathered = true;
+        vouches[i] = scratch_.jacobians.at(reading, i, jacobians[i]);
+      }
       vouched = std::min(vouched, vouches[i]);
       stacked = add(stacked, scale(sub(apply(jacobians[i], stacked), stacked), g));
     }
@@ -608,11 +607,11 @@ void Transport::fit_jacobians(const JacobianSamples& samples, std::span<const bo
   if (!jacobians.ready()) return;
   for (std::size_t at = 0; at < vertices_.size(); ++at)
     if (scratch_.carried_here[at]) jacobians.need(widen(base_[vertices_[at]]));
+  jacobians.plan([&](std::uint32_t v) { return base_normal(v); }, pool);
   for (std::size_t i = 0; i < n_; ++i) {
     if (!carries[i]) continue;
     jacobians.fit(
-        i, [&](std::uint32_t v) { return sub(edited_position(i, v), widen(base_[v])); },
-        [&](std::uint32_t v) { return base_normal(v); }, pool);
+        i, [&](std::uint32_t v) { return sub(edited_position(i, v), widen(base_[v])); }, pool);
   }
   hedged_ = true;
 }

@@ -30,14 +30,17 @@ Fitted fit_and_read(const Mesh& mesh, const Field& u, double r, const Vec3d& at,
   jacobians.prepare(mesh.positions, {samples, r}, 1);
   jacobians.need(at);
   WorkerPool pool(2);
-  jacobians.fit(
-      0, [&](std::uint32_t v) { return u(widen(mesh.positions[v])); },
+  jacobians.plan(
       [&](std::uint32_t v) {
         return length(normal_everywhere) > 0 ? normal_everywhere : widen(unit(normals[v]));
       },
       pool);
+  jacobians.fit(
+      0, [&](std::uint32_t v) { return u(widen(mesh.positions[v])); }, pool);
+  RegionalJacobians::Reading reading;
+  jacobians.gather(at, reading);
   Fitted f;
-  f.vouched = jacobians.at(at, 0, f.a);
+  f.vouched = jacobians.at(reading, 0, f.a);
   return f;
 }
 
