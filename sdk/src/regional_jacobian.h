@@ -7,11 +7,11 @@
 // least-squares affine fit of the diff's displacement u over the samples within `radius`
 // (weights (1 - d^2 / r^2)^2). Samples of every part count, as a volumetric deformer moves
 // every part within its reach, and coincident vertices of a split seam read the same fit, so
-// the seam stays closed. Where the region is flat
-// the normal column is not seen, and a ridge pulls it toward sigma n: the region scaling its
-// thickness as evenly as its surface (sigma the geometric mean of the tangent stretches).
+// the seam stays closed. Where the region is flat the normal column is not seen, and a ridge
+// along the normal pulls it toward sigma n: the region scaling its thickness as evenly as its
+// surface (sigma the geometric mean of the tangent stretches).
 //
-// Fitted at sample vertices (a hierarchy level's representatives: about a thousand over the
+// Fitted at sample vertices (a hierarchy level's representatives: at most 2,048 over the
 // mesh, whatever its resolution), only those near a vertex that some diff carries, and
 // interpolated from the samples within half the radius.
 #pragma once
