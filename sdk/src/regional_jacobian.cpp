@@ -26,7 +26,7 @@ Mat3d solve(const Sym3& s, const Mat3d& b) {
   const double c00 = s.yy * s.zz - s.yz * s.yz, c01 = s.xz * s.yz - s.xy * s.zz,
                c02 = s.xy * s.yz - s.xz * s.yy, c11 = s.xx * s.zz - s.xz * s.xz,
                c12 = s.xy * s.xz - s.xx * s.yz, c22 = s.xx * s.yy - s.xy * s.xy;
-  const double det = s.xx * c00 + s.xy * c01 + s.xz * c02;
+  const double det = determinant(s);
   Mat3d x;
   const double inv[9] = {c00, c01, c02, c01, c11, c12, c02, c12, c22};
   for (int r = 0; r < 3; ++r)
@@ -83,7 +83,6 @@ void RegionalJacobians::prepare(std::span<const Vec3f> base, const JacobianSampl
                                 std::size_t users) {
   radius_ = samples.radius;
   cell_ = kReadReach * radius_;
-  users_ = users;
   site_.clear();
   keyed_.clear();
   needed_list_.clear();
@@ -112,7 +111,7 @@ void RegionalJacobians::prepare(std::span<const Vec3f> base, const JacobianSampl
     slot = h;
   }
   needed_.assign(site_.size(), 0);
-  seen_.assign(1024, Cell{});
+  seen_.assign(std::max<std::size_t>(seen_.size(), 1024), Cell{});  // as large as last time
   seen_count_ = 0;
   candidates_.clear();
   moved_.resize(site_.size());
@@ -185,16 +184,17 @@ void RegionalJacobians::need(const Vec3d& p) {
   ++seen_count_;
 }
 
-/// The part of marked sample k's fit that no diff changes: its neighbours within the radius
-/// and their weights, their weighted mean offset and covariance, ridged along the base normal
-/// n (only there, so the tangent columns stay as measured); not ok where the neighbours cannot
-/// fix a Jacobian (too few, about one point, or about a line: a thin part seen edge on).
+/// How many samples lie within the radius of marked sample k.
 std::uint32_t RegionalJacobians::count_near(std::size_t k) const {
   std::uint32_t count = 0;
   near(site_[needed_list_[k]].p, radius_, [&count](std::uint32_t, double) { ++count; });
   return count;
 }
 
+/// The part of marked sample k's fit that no diff changes: its neighbours within the radius
+/// and their weights, their weighted mean offset and covariance, ridged along the base normal
+/// n (only there, so the tangent columns stay as measured); not ok where the neighbours cannot
+/// fix a Jacobian (too few, about one point, or about a line: a thin part seen edge on).
 void RegionalJacobians::plan_site(std::size_t k, const Vec3d& n) {
   const Site& c = site_[needed_list_[k]];
   const double r2 = radius_ * radius_;

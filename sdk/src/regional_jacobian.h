@@ -137,7 +137,6 @@ class RegionalJacobians {
   std::vector<Vec3d> moved_;                ///< per site: the displacement being fitted
   std::vector<Mat3d> fitted_;               ///< per user and site
   std::vector<std::uint8_t> ok_;            ///< per user and site: fitted and well posed
-  std::size_t users_ = 0;
 };
 
 template <class Normal>
