@@ -53,8 +53,11 @@ struct FoldRepairScratch {
                                         ///< dominant diff at its seeds (the dominant remedy)
   std::vector<std::uint32_t> count;     ///< per part: its seeds
   std::vector<std::uint32_t> region, frontier, next;
-  std::vector<Vec3f> start;    ///< per moved vertex: its position when the current phase began
-  std::vector<Vec3d> relaxed;  ///< per region vertex: its smoothed displacement in a sweep
+  std::vector<Vec3f> start;      ///< per moved vertex: its position when the current phase began
+  std::vector<double> strength;  ///< per moved vertex: its own pull at full fade (a face pull)
+  std::vector<double> pull;      ///< per moved vertex: the pull it takes, faded from the seeds
+  std::vector<double> reached, grown;  ///< per moved vertex: the spread of strengths, per ring
+  std::vector<Vec3d> relaxed;          ///< per region vertex: its smoothed displacement in a sweep
   std::vector<std::uint32_t> seam_first;    ///< per seam group: where its members start in
   std::vector<std::uint32_t> seam_members;  ///< ... this list of moved vertices, by group
   std::vector<std::uint8_t> seam_closed;    ///< per seam group: all members at one position
