@@ -109,8 +109,10 @@ class Transport {
   std::span<const TransportInput> users_;
   TransportScratch& scratch_;
   std::size_t n_;
-  bool same_once_;       ///< false: s = 0 (SameChange::add)
-  bool hedged_ = false;  ///< the Jacobians are fitted: carried details are hedged
+  bool same_once_;         ///< false: s = 0 (SameChange::add)
+  bool hedged_ = false;    ///< carried details are hedged toward their stacked reading
+  bool regional_ = false;  ///< the regional Jacobians are fitted
+  void fit_grabs(std::span<const bool> carries);
   double same(const VertexState& s, std::size_t i, std::size_t j) const;
 };
 
@@ -584,6 +586,15 @@ Vec3f Transport::transported(std::size_t at, const VertexState& s) const {
       const Quat frame = carrier(at, i, level);
       carried = add(carried, scale(rotation_change(swing(frame, scratch_.normal[at]), carried), g));
       if (!hedged_) continue;
+      if (const RadialGrab& grab = scratch_.grabs[i]; grab.valid()) {
+        const Vec3d p = widen(base_[vertices_[at]]);
+        stacked = add(stacked, scale(sub(grab.carry(p, stacked), stacked), g));
+        continue;
+      }
+      if (!regional_) {
+        vouched = 0;
+        continue;
+      }
       if (vouches[i] < 0) {
         if (!gathered) scratch_.jacobians.gather(widen(base_[vertices_[at]]), reading);
         gathered = true;
@@ -602,18 +613,37 @@ Vec3f Transport::transported(std::size_t at, const VertexState& s) const {
 /// at, from each diff's displacement and the base normals there.
 void Transport::fit_jacobians(const JacobianSamples& samples, std::span<const bool> carries,
                               WorkerPool& pool) {
+  if (!(samples.radius > 0)) return;  // frame-transport: the frames alone carry
+  hedged_ = true;
+  fit_grabs(carries);
   RegionalJacobians& jacobians = scratch_.jacobians;
   jacobians.prepare(base_, samples, n_);
-  if (!jacobians.ready()) return;
+  regional_ = jacobians.ready();
+  if (!regional_) return;
   for (std::size_t at = 0; at < vertices_.size(); ++at)
     if (scratch_.carried_here[at]) jacobians.need(widen(base_[vertices_[at]]));
   jacobians.plan([&](std::uint32_t v) { return base_normal(v); }, pool);
   for (std::size_t i = 0; i < n_; ++i) {
-    if (!carries[i]) continue;
+    if (!carries[i] || scratch_.grabs[i].valid()) continue;
     jacobians.fit(
         i, [&](std::uint32_t v) { return sub(edited_position(i, v), widen(base_[v])); }, pool);
   }
-  hedged_ = true;
+}
+
+/// Recognises the carrying diffs that are grabs (radial_grab.h), from the vertices each moves.
+void Transport::fit_grabs(std::span<const bool> carries) {
+  if (scratch_.grabs.size() < n_) scratch_.grabs.resize(n_);
+  for (std::size_t i = 0; i < n_; ++i) {
+    RadialGrab& grab = scratch_.grabs[i];
+    grab.reset();
+    if (!carries[i]) continue;
+    std::vector<std::uint32_t>& moved = scratch_.moved_by;
+    moved.clear();
+    for (const std::uint32_t v : vertices_)
+      if (has(users_[i].changed, v)) moved.push_back(v);
+    grab.fit(base_, moved,
+             [&](std::uint32_t v) { return sub(edited_position(i, v), widen(base_[v])); });
+  }
 }
 
 }  // namespace

@@ -72,6 +72,7 @@
 #include "csculpt/dual_quat.h"
 #include "csculpt/hierarchy.h"
 #include "csculpt/vec3.h"
+#include "radial_grab.h"
 #include "regional_jacobian.h"
 #include "worker_pool.h"
 
@@ -118,6 +119,9 @@ struct TransportScratch {
   std::vector<std::uint8_t> reads_level;
   /// The carriers' regional Jacobians, for the stacked reading of what they carry.
   RegionalJacobians jacobians;
+  /// Per diff: the grab it is, when it carries and is one (its stacked reading is exact).
+  std::vector<RadialGrab> grabs;
+  std::vector<std::uint32_t> moved_by;  ///< the vertices one diff moves
 };
 
 /// Merged positions of the vertices in `vertices` (increasing: the union of the changed
