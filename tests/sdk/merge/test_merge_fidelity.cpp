@@ -288,6 +288,32 @@ Deform taper(float k) {
   };
 }
 
+struct BothIdeals {
+  double stack_full, stack_riding, stack_sum, frame_full, frame_sum;
+};
+
+/// A detail under a coarse edit (two artists), merged by `full`, `frame-transport` (riding)
+/// and `sum`, scored against Blender's stack (the coarse edit applied to the detailed
+/// surface) and against the frame ideal (printed).
+BothIdeals against_both_ideals(const Mesh& base, const Hierarchy& h, const Deform& detail,
+                               const Deform& coarse_edit) {
+  const Mesh fine = deformed(base, detail), coarse = deformed(base, coarse_edit);
+  Mesh stack = base;
+  for (Vec3f& p : stack.positions) p = coarse_edit(detail(p));
+  const Mesh frame = turned_detail_ideal(base, coarse, fine);
+  const Mesh full = merged(base, h, {coarse, fine});
+  const Mesh riding = merged(base, h, {coarse, fine}, MergeMethod::frame_transport);
+  const Mesh sum = merged(base, h, {coarse, fine}, MergeMethod::sum);
+  const BothIdeals e{rel_error(base, fine, full, stack), rel_error(base, fine, riding, stack),
+                     rel_error(base, fine, sum, stack), rel_error(base, fine, full, frame),
+                     rel_error(base, fine, sum, frame)};
+  std::printf(
+      "against the stack full %.4f, frame-transport %.4f, sum %.4f; against the frame "
+      "ideal full %.4f, sum %.4f\n",
+      e.stack_full, e.stack_riding, e.stack_sum, e.frame_full, e.frame_sum);
+  return e;
+}
+
 // A volumetric deformer over a detail (docs/merge-quality.md, "The hedge"): Blender's stack
 // puts the detail first and deforms it with the space, so on a taper's side, where the
 // surface tilts by 31 degrees but does not shrink, the stacked detail keeps its direction;
@@ -298,26 +324,11 @@ Deform taper(float k) {
 TEST(MergeFidelity, AVolumetricTaperOverADetailIsHedgedTowardItsStack) {
   const Mesh base = make_sphere(20000);
   const Hierarchy h = Hierarchy::build(base);
-  const Deform detail = bump(unit({1, 0, 0.05f}), 0.06f, 0.35f), coarse_edit = taper(0.6f);
-  const Mesh fine = deformed(base, detail), coarse = deformed(base, coarse_edit);
-  Mesh stack = base;
-  for (Vec3f& p : stack.positions) p = coarse_edit(detail(p));
-  const Mesh frame = turned_detail_ideal(base, coarse, fine);
-  const Mesh full = merged(base, h, {coarse, fine});
-  const Mesh riding = merged(base, h, {coarse, fine}, MergeMethod::frame_transport);
-  const Mesh sum = merged(base, h, {coarse, fine}, MergeMethod::sum);
-  const double stack_full = rel_error(base, fine, full, stack);
-  const double stack_riding = rel_error(base, fine, riding, stack);
-  const double stack_sum = rel_error(base, fine, sum, stack);
-  const double frame_full = rel_error(base, fine, full, frame);
-  const double frame_sum = rel_error(base, fine, sum, frame);
-  std::printf(
-      "against the stack full %.4f, frame-transport %.4f, sum %.4f; against the frame "
-      "ideal full %.4f, sum %.4f\n",
-      stack_full, stack_riding, stack_sum, frame_full, frame_sum);
-  EXPECT_GT(stack_riding, 1.5 * stack_sum) << "not a case the two ideals disagree on";
-  EXPECT_LE(stack_full, 1.5 * stack_sum);
-  EXPECT_LT(frame_full, frame_sum);
+  const BothIdeals e =
+      against_both_ideals(base, h, bump(unit({1, 0, 0.05f}), 0.06f, 0.35f), taper(0.6f));
+  EXPECT_GT(e.stack_riding, 1.5 * e.stack_sum) << "not a case the two ideals disagree on";
+  EXPECT_LE(e.stack_full, 1.5 * e.stack_sum);
+  EXPECT_LT(e.frame_full, e.frame_sum);
 }
 
 // A grab whose falloff is steep across the regional fit's radius, over a detail on its slope:
@@ -330,23 +341,10 @@ TEST(MergeFidelity, ASteepGrabOverADetailIsReadAsAGrab) {
   Mesh base = make_sphere(20000);
   for (Vec3f& p : base.positions) p = {p.x, 0.8f * p.y, 1.3f * p.z};
   const Hierarchy h = Hierarchy::build(base);
-  const Deform detail = bump(unit({0.35f, 0.1f, 0.85f}), 0.05f, 0.15f),
-               coarse_edit = grab({0.2f, 0.1f, 1.25f}, {0.1f, 0.2f, 0.25f}, 0.25f);
-  const Mesh fine = deformed(base, detail), coarse = deformed(base, coarse_edit);
-  Mesh stack = base;
-  for (Vec3f& p : stack.positions) p = coarse_edit(detail(p));
-  const Mesh frame = turned_detail_ideal(base, coarse, fine);
-  const Mesh full = merged(base, h, {coarse, fine});
-  const Mesh sum = merged(base, h, {coarse, fine}, MergeMethod::sum);
-  const double stack_full = rel_error(base, fine, full, stack);
-  const double stack_sum = rel_error(base, fine, sum, stack);
-  const double frame_full = rel_error(base, fine, full, frame);
-  const double frame_sum = rel_error(base, fine, sum, frame);
-  std::printf(
-      "against the stack full %.4f, sum %.4f; against the frame ideal full %.4f, sum %.4f\n",
-      stack_full, stack_sum, frame_full, frame_sum);
-  EXPECT_LE(stack_full, 1.5 * stack_sum);
-  EXPECT_LT(frame_full, frame_sum);
+  const BothIdeals e = against_both_ideals(base, h, bump(unit({0.35f, 0.1f, 0.85f}), 0.05f, 0.15f),
+                                           grab({0.2f, 0.1f, 1.25f}, {0.1f, 0.2f, 0.25f}, 0.25f));
+  EXPECT_LE(e.stack_full, 1.5 * e.stack_sum);
+  EXPECT_LT(e.frame_full, e.frame_sum);
 }
 
 /// A rough detail: each vertex within r of the unit direction c lifted along its normal by a
