@@ -32,10 +32,6 @@ bool has(const std::uint64_t* bits, std::uint32_t v) {
   return (bits[v >> 6] >> (v & 63) & 1) != 0;
 }
 
-double norm2(const Vec3d& a) {
-  return dot(a, a);
-}
-
 /// (R - I) v for the rotation of unit quaternion q: v' - v = w t + q.xyz x t, t = 2 q.xyz x v.
 Vec3d rotation_change(const Quat& q, const Vec3d& v) {
   const Vec3d u{q.x, q.y, q.z};

@@ -1,10 +1,11 @@
 // A grab recognised in a diff (radial_grab.h).
 #include "radial_grab.h"
 
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
-
-#include "regional_jacobian.h"
 
 namespace csculpt::detail {
 namespace {
@@ -37,71 +38,45 @@ constexpr double kDetermined = 1e-5;
 /// grabs in one diff do not.
 constexpr double kScatter = 0.01;
 
-/// Solves A x = b for A symmetric positive definite (N x N, row-major) by Cholesky, in place
-/// (x into b): false when A is not positive definite.
-template <std::size_t N>
-bool cholesky_solve(std::array<double, N * N>& a, std::array<double, N>& b) {
-  for (std::size_t j = 0; j < N; ++j) {
-    double d = a[j * N + j];
-    for (std::size_t k = 0; k < j; ++k) d -= a[j * N + k] * a[j * N + k];
-    if (!(d > 0)) return false;
-    const double l = std::sqrt(d);
-    a[j * N + j] = l;
-    for (std::size_t i = j + 1; i < N; ++i) {
-      double s = a[i * N + j];
-      for (std::size_t k = 0; k < j; ++k) s -= a[i * N + k] * a[j * N + k];
-      a[i * N + j] = s / l;
-    }
-  }
-  for (std::size_t i = 0; i < N; ++i) {  // L y = b
-    for (std::size_t k = 0; k < i; ++k) b[i] -= a[i * N + k] * b[k];
-    b[i] /= a[i * N + i];
-  }
-  for (std::size_t i = N; i-- > 0;) {  // L^T x = y
-    for (std::size_t k = i + 1; k < N; ++k) b[i] -= a[k * N + i] * b[k];
-    b[i] /= a[i * N + i];
-  }
-  return true;
-}
+template <int N>
+using Square = Eigen::Matrix<double, N, N>;
+template <int N>
+using Column = Eigen::Matrix<double, N, 1>;
 
-/// Adds row r with right-hand side y to the normal equations (ata, atb).
-template <std::size_t N>
-void accumulate(const std::array<double, N>& r, double y, std::array<double, N * N>& ata,
-                std::array<double, N>& atb) {
-  for (std::size_t u = 0; u < N; ++u) {
-    atb[u] += r[u] * y;
-    for (std::size_t v = 0; v < N; ++v) ata[u * N + v] += r[u] * r[v];
-  }
-}
+/// Normal equations A^T A x = A^T y, accumulated row by row.
+template <int N>
+struct NormalEquations {
+  Square<N> ata = Square<N>::Zero();
+  Column<N> atb = Column<N>::Zero();
 
-/// Whether the first three unknowns of the normal equations `ata` (N x N, N > 3) are fixed by
-/// them once the others are eliminated: the Schur complement of the rest, by kDetermined.
-template <std::size_t N>
-bool centre_determined(const std::array<double, N * N>& ata) {
-  constexpr std::size_t m = N - 3;
-  double s[3][3];
-  for (std::size_t c = 0; c < 3; ++c) {
-    std::array<double, m * m> rest;
-    std::array<double, m> x;
-    for (std::size_t u = 0; u < m; ++u) {
-      x[u] = ata[(3 + u) * N + c];
-      for (std::size_t v = 0; v < m; ++v) rest[u * m + v] = ata[(3 + u) * N + 3 + v];
-    }
-    if (!cholesky_solve<m>(rest, x)) return false;
-    for (std::size_t r = 0; r < 3; ++r) {
-      double e = ata[r * N + c];
-      for (std::size_t u = 0; u < m; ++u) e -= ata[r * N + 3 + u] * x[u];
-      s[r][c] = e;
-    }
+  void add(const Column<N>& row, double y) {
+    ata.noalias() += row * row.transpose();
+    atb += row * y;
   }
-  const Sym3 schur{s[0][0], s[0][1], s[0][2], s[1][1], s[1][2], s[2][2]};
-  const double trace = schur.xx + schur.yy + schur.zz;
-  return trace > 0 && determinant(schur) >= kDetermined * trace * trace * trace;
-}
 
-double norm2(const Vec3d& v) {
-  return dot(v, v);
-}
+  /// The least-squares solution into x (a ridge of 1e-12 of the diagonal keeps exact
+  /// collinearity from dividing by zero); false when the equations are singular.
+  bool solve(Column<N>& x) {
+    ata.diagonal() *= 1 + 1e-12;
+    const Eigen::LLT<Square<N>> llt(ata);
+    if (llt.info() != Eigen::Success) return false;
+    x = llt.solve(atb);
+    return true;
+  }
+
+  /// Whether the first three unknowns are fixed once the others are eliminated: the Schur
+  /// complement of the rest, by kDetermined.
+  bool centre_determined() const {
+    constexpr int m = N - 3;
+    const Eigen::LLT<Square<m>> rest(ata.template bottomRightCorner<m, m>());
+    if (rest.info() != Eigen::Success) return false;
+    const Eigen::Matrix3d schur =
+        ata.template topLeftCorner<3, 3>() -
+        ata.template topRightCorner<3, m>() * rest.solve(ata.template bottomLeftCorner<m, 3>());
+    const double trace = schur.trace();
+    return trace > 0 && schur.determinant() >= kDetermined * trace * trace * trace;
+  }
+};
 
 }  // namespace
 
@@ -141,43 +116,42 @@ bool RadialGrab::sample(std::span<const Vec3f> base, std::span<const std::uint32
 /// peak and q(f) = r(f)^2 - |c|^2, which is linear in c and in q's coefficients (a polynomial
 /// of degree kInverseDegree). Distances in units of rho.
 bool RadialGrab::trilaterate() {
-  constexpr std::size_t m = 3 + kInverseDegree + 1;
-  std::array<double, m * m> ata{};
-  std::array<double, m> atb{};
+  constexpr int m = 3 + kInverseDegree + 1;
+  NormalEquations<m> equations;
   std::size_t used = 0;
   for (std::size_t i = 0; i < at_.size(); ++i) {
     const double f = length_[i] / peak_;
     if (!(f >= kRim)) continue;
     const Vec3d p = scale(sub(at_[i], centre_), 1.0 / rho_);
-    std::array<double, m> row;
-    row[0] = 2 * p.x, row[1] = 2 * p.y, row[2] = 2 * p.z, row[3] = 1;
-    for (std::size_t k = 1; k <= kInverseDegree; ++k) row[3 + k] = row[2 + k] * f;
-    accumulate<m>(row, norm2(p), ata, atb);
+    Column<m> row;
+    row << 2 * p.x, 2 * p.y, 2 * p.z, 1, Column<m - 4>::Zero();
+    for (int k = 1; k <= static_cast<int>(kInverseDegree); ++k) row[3 + k] = row[2 + k] * f;
+    equations.add(row, norm2(p));
     ++used;
   }
-  if (used < 2 * m || !centre_determined<m>(ata)) return false;
-  if (!cholesky_solve<m>(ata, atb)) return false;
-  centre_ = add(centre_, scale(Vec3d{atb[0], atb[1], atb[2]}, rho_));
+  Column<m> x;
+  if (used < 2 * m || !equations.centre_determined() || !equations.solve(x)) return false;
+  centre_ = add(centre_, scale(Vec3d{x[0], x[1], x[2]}, rho_));
   return true;
 }
 
 /// The falloff, a polynomial in the distance from the centre over rho fitted by least squares
 /// to every sample, and whether the samples lie on it (kScatter).
 bool RadialGrab::fit_falloff() {
-  constexpr std::size_t m = kFalloffDegree + 1;
-  std::array<double, m * m> ata{};
-  std::array<double, m> atb{};
+  constexpr int m = kFalloffDegree + 1;
+  NormalEquations<m> equations;
   reach_ = 0;
   for (std::size_t i = 0; i < at_.size(); ++i) {
     const double x = length(sub(at_[i], centre_)) / rho_;
     reach_ = std::max(reach_, x);
-    std::array<double, m> power;
+    Column<m> power;
     power[0] = 1;
-    for (std::size_t k = 1; k < m; ++k) power[k] = power[k - 1] * x;
-    accumulate<m>(power, length_[i], ata, atb);
+    for (int k = 1; k < m; ++k) power[k] = power[k - 1] * x;
+    equations.add(power, length_[i]);
   }
-  if (!cholesky_solve<m>(ata, atb)) return false;
-  falloff_ = atb;
+  Column<m> a;
+  if (!equations.solve(a)) return false;
+  for (int k = 0; k < m; ++k) falloff_[k] = a[k];
   double squares = 0;
   for (std::size_t i = 0; i < at_.size(); ++i) {
     const double e = falloff(length(sub(at_[i], centre_))) - length_[i];

@@ -16,6 +16,11 @@ constexpr double kConditioning = 1e-6;
 constexpr double kReadReach = 0.5;
 constexpr std::int64_t kCellBias = 1 << 20;
 
+double determinant(const Sym3& s) {
+  return s.xx * (s.yy * s.zz - s.yz * s.yz) - s.xy * (s.xy * s.zz - s.xz * s.yz) +
+         s.xz * (s.xy * s.yz - s.xz * s.yy);
+}
+
 /// x = S^-1 b for the columns of b (row-major 3 x 3); NaN where S is singular.
 Mat3d solve(const Sym3& s, const Mat3d& b) {
   const double c00 = s.yy * s.zz - s.yz * s.yz, c01 = s.xz * s.yz - s.xy * s.zz,

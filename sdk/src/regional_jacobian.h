@@ -41,11 +41,6 @@ struct Sym3 {
   double xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
 };
 
-inline double determinant(const Sym3& s) {
-  return s.xx * (s.yy * s.zz - s.yz * s.yz) - s.xy * (s.xy * s.zz - s.xz * s.yz) +
-         s.xz * (s.xy * s.yz - s.xz * s.yy);
-}
-
 inline Vec3d apply(const Mat3d& a, const Vec3d& v) {
   return {a.m[0] * v.x + a.m[1] * v.y + a.m[2] * v.z, a.m[3] * v.x + a.m[4] * v.y + a.m[5] * v.z,
           a.m[6] * v.x + a.m[7] * v.y + a.m[8] * v.z};

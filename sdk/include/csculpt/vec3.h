@@ -56,6 +56,9 @@ inline double dot(Vec3d a, Vec3d b) {
 inline Vec3d cross(Vec3d a, Vec3d b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
+inline double norm2(Vec3d a) {
+  return dot(a, a);
+}
 inline double length(Vec3d a) {
   return std::sqrt(dot(a, a));
 }
