@@ -289,10 +289,6 @@ def held_object(kind):
         o = imported(lambda: None, None); welded(o); normalised(o)
         s = o.modifiers.new("s", 'SUBSURF'); s.levels = 3; s.subdivision_type = 'SIMPLE'
         bpy.ops.object.modifier_apply(modifier="s")  # flat boxes keep their shape, get vertices
-    elif kind in ("teapots", "teapots_shipped"):  # teapots.DAE: teapots of lid, body, spout, handle
-        bpy.ops.wm.collada_import(filepath=M + "Collada/teapots.DAE")
-        o = imported(lambda: None, None); normalised(o)
-        if kind == "teapots": welded(o); subdivided(o, 1)
     elif kind in ("axe", "axe_shipped"):  # yxa_1.blend: an axe, head and handle apart
         bpy.ops.wm.open_mainfile(filepath=M + "BLEND/yxa_1.blend")
         o = imported(lambda: None, None); o.modifiers.clear(); normalised(o)
@@ -301,13 +297,6 @@ def held_object(kind):
         bpy.ops.wm.collada_import(filepath=M + "Collada/COLLADA.dae")
         o = imported(lambda: None, None); normalised(o)
         if kind == "letters": welded(o); subdivided(o, 1)
-    elif kind in ("bones", "bones_shipped"):  # huesitos.fbx: a skeleton of separate bones
-        bpy.ops.import_scene.fbx(filepath=M + "FBX/huesitos.fbx")
-        o = imported(lambda: None, None); o.modifiers.clear(); normalised(o)
-        if kind == "bones": welded(o); subdivided(o, 1)
-    elif kind == "rom":  # MotionCaptureROM.WRL: a figure of separate limbs, as VRML ships it
-        x3d_import(M + "WRL/MotionCaptureROM.WRL")
-        o = imported(lambda: None, None); welded(o); normalised(o); subdivided(o, 1)
     else:
         raise ValueError(kind)
     bpy.context.view_layer.objects.active = o; o.select_set(True)
