@@ -1,5 +1,5 @@
 # Builds merge cases from edits authored by Blender's own deformers.
-# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|held4|house|extra|crumple|probe4|...|probe10]
+# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|held4|house|extra|crumple|probe4|...|probe11]
 # (Debian 12: apt-get install blender assimp-testmodels). Add your own case() lines to author more.
 # public, public2: the sets of shared/eval/cases (this file began as shared/eval/make_cases.py);
 # held: tests/eval/cases (see its README.md), which also prints what each case holds;
@@ -289,6 +289,9 @@ def held_object(kind):
         o = imported(lambda: None, None); welded(o); normalised(o)
         s = o.modifiers.new("s", 'SUBSURF'); s.levels = 3; s.subdivision_type = 'SIMPLE'
         bpy.ops.object.modifier_apply(modifier="s")  # flat boxes keep their shape, get vertices
+    elif kind == "suzanne_shipped":  # Suzanne_248.blend: Blender 2.48's monkey, facing -y
+        bpy.ops.wm.open_mainfile(filepath=M + "BLEND/Suzanne_248.blend")
+        o = imported(lambda: None, None); o.modifiers.clear(); normalised(o)
     elif kind in ("axe", "axe_shipped"):  # yxa_1.blend: an axe, head and handle apart
         bpy.ops.wm.open_mainfile(filepath=M + "BLEND/yxa_1.blend")
         o = imported(lambda: None, None); o.modifiers.clear(); normalised(o)
@@ -925,6 +928,40 @@ elif which == "probe10":
           lambda o: pinch(o, near(o, (0.5, 0, 0.2))[0], 0.15, 0.6),
           lambda o: tiny_grab(o, near(o, (0, 0.2, 0.2))[0], (0.03, 0, 0), 0.15),
           lambda o: bend(o, math.radians(45), 'X')], "stack", details=[0, 1, 2])
+elif which == "probe11":
+    # the held-out kinds again on coarse and sliver meshes: Blender 2.48's Suzanne as it ships
+    # (1,980 vertices, eyes apart), the axe, the letters; scored by hand, not kept
+    case("cast_plus_detail_suzanne_shipped", "suzanne_shipped",
+         [lambda o: detail(o, at("-y"), 0.3, 0.04, 160),
+          lambda o: cast(o, 0.4)], "stack", details=[0])
+    case("grab_plus_detail_suzanne_shipped", "suzanne_shipped",
+         [lambda o: detail(o, at("+z"), 0.3, 0.04, 161),
+          lambda o: grab(o, at("+z"), at("+z", 1, (0.05, -0.1, 0.15)), 0.6)], "stack", details=[0])
+    case("bend_plus_strong_detail_suzanne_shipped", "suzanne_shipped",
+         [lambda o: detail(o, at("-y"), 0.3, 0.15, 162),
+          lambda o: bend(o, math.radians(90), 'X')], "stack", details=[0])
+    case("disjoint_suzanne_shipped", "suzanne_shipped",
+         [lambda o: detail(o, at("+x"), 0.2, 0.04, 163),
+          lambda o: grab(o, at("-x"), at("-x", 1, (-0.1, 0, 0.1)), 0.3)], "stack", details=[0])
+    case("three_artists_suzanne_shipped", "suzanne_shipped",
+         [lambda o: detail(o, at("-y"), 0.25, 0.03, 164),
+          lambda o: pinch(o, at("+z"), 0.2, 0.6),
+          lambda o: twist(o, math.radians(60), 'Z')], "stack", details=[0, 1])
+    case("taper_plus_pinch_suzanne_shipped", "suzanne_shipped",
+         [lambda o: pinch(o, at("-y"), 0.2, 0.6),
+          lambda o: simple(o, 'TAPER', 0.7, 'Z')], "stack", details=[0])
+    case("twist_plus_swirl_axe_shipped", "axe_shipped",
+         [lambda o: local_twist(o, *LM["+x"], 0.2, math.radians(50)),
+          lambda o: twist(o, math.radians(60), 'Z')], "stack", details=[0])
+    case("grab_plus_tinygrab_letters_shipped", "letters_shipped",
+         [lambda o: tiny_grab(o, at("+z"), (0.03, 0.02, 0), 0.15),
+          lambda o: grab(o, at("+z"), at("+z", 1, (0, 0.1, 0.2)), 0.5)], "stack", details=[0])
+    case("cast_plus_detail_letters", "letters",
+         [lambda o: detail(o, at("+z"), 0.2, 0.02, 165),
+          lambda o: cast(o, 0.3)], "stack", details=[0])
+    case("stretch_plus_detail_axe", "axe",
+         [lambda o: detail(o, at("+x"), 0.25, 0.04, 166),
+          lambda o: simple(o, 'STRETCH', 0.3, 'Z')], "stack", details=[0])
 elif which == "house":
     house_grab_case()
     case("cast_plus_detail_house", "house",
