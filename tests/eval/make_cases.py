@@ -674,6 +674,12 @@ elif which == "held4":
     case("twist_plus_pinch_letter", "letters",
          [lambda o: pinch(o, at("+z"), 0.15, 0.6),
           lambda o: twist(o, math.radians(90), 'X')], "stack", details=[0], crop=(lambda: at("+z"), 0.25))
+    # from set probe11: a Cast over a detail of a few edges on Blender 2.48's Suzanne as it
+    # ships (1,980 vertices); both the frame ideal and addition fold two faces, and smoothing
+    # at its full rate from the first attempt flattened a quarter of the detail to open them
+    case("cast_plus_detail_suzanne_shipped", "suzanne_shipped",
+         [lambda o: detail(o, at("-y"), 0.3, 0.04, 160),
+          lambda o: cast(o, 0.4)], "stack", details=[0])
 elif which == "held3":
     # regr01.obj, a house of 275 pieces (32 once welded), not welded: every piece subdivided
     # on its own (its walls' large faces get vertices); the grab crushes thin walls, folding
