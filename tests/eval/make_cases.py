@@ -1,5 +1,5 @@
 # Builds merge cases from edits authored by Blender's own deformers.
-# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|held4|house|extra|crumple|probe4|...|probe11]
+# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|held4|house|extra|crumple|probe4|...|probe12]
 # (Debian 12: apt-get install blender assimp-testmodels). Add your own case() lines to author more.
 # public, public2: the sets of shared/eval/cases (this file began as shared/eval/make_cases.py);
 # held: tests/eval/cases (see its README.md), which also prints what each case holds;
@@ -968,6 +968,28 @@ elif which == "probe11":
     case("stretch_plus_detail_axe", "axe",
          [lambda o: detail(o, at("+x"), 0.25, 0.04, 166),
           lambda o: simple(o, 'STRETCH', 0.3, 'Z')], "stack", details=[0])
+elif which == "probe12":
+    # sideways details and Casts on the coarse and sliver meshes of probe10-11; scored by hand
+    case("cast_plus_pinch_suzanne_shipped", "suzanne_shipped",
+         [lambda o: pinch(o, at("-y"), 0.25, 0.6),
+          lambda o: cast(o, 0.4)], "stack", details=[0])
+    case("cast_plus_swirl_axe", "axe",
+         [lambda o: local_twist(o, *LM["+x"], 0.2, math.radians(50)),
+          lambda o: cast(o, 0.4)], "stack", details=[0])
+    case("taper_plus_detail_suzanne_shipped", "suzanne_shipped",
+         [lambda o: detail(o, at("+z"), 0.3, 0.04, 170),
+          lambda o: simple(o, 'TAPER', 0.7, 'Y')], "stack", details=[0])
+    case("twist_plus_detail_letters_shipped", "letters_shipped",
+         [lambda o: detail_along(o, at("+z"), 0.2, 0.03, 171, 'Z'),
+          lambda o: twist(o, math.radians(60), 'X')], "stack", details=[0])
+    case("four_artists_suzanne_shipped", "suzanne_shipped",
+         [lambda o: detail(o, at("-y"), 0.25, 0.03, 172),
+          lambda o: pinch(o, at("+z"), 0.2, 0.6),
+          lambda o: tiny_grab(o, at("+x"), (0, 0.03, 0.03), 0.2),
+          lambda o: cast_part(o, 0.6, at("-y"), 0.7)], "stack", details=[0, 1, 2])
+    case("grab_plus_strong_detail_axe", "axe",
+         [lambda o: detail(o, at("+x"), 0.25, 0.1, 173),
+          lambda o: grab(o, at("+x"), at("+x", 1, (0.1, 0.05, 0.1)), 0.5)], "stack", details=[0])
 elif which == "house":
     house_grab_case()
     case("cast_plus_detail_house", "house",
