@@ -7,7 +7,8 @@
 // repaired where it appears, unless the artists crumple the surface there themselves (plain
 // addition folds it too, under a coarse edit that carried the others, beside faces an
 // artist's own edit folds: the fold is their edits composed, and what is left is a subset of
-// addition's folds): around its vertices the merged positions are drawn toward plain
+// addition's folds): around its vertices the merged positions are drawn back toward the
+// frames' own reading where the hedge toward the stacked reading moved them, then toward plain
 // addition of the edits there (the frames that carried one edit into another undone); where
 // that still folds, the displacement field is smoothed; where even that folds (faces the base
 // already made slivers), the region is drawn toward the shape the edit moving it most gives it,
@@ -73,13 +74,16 @@ struct FoldRepairScratch {
 /// lets the smoothing keep a coarse edit that carried the details folding on it. `sole` (empty,
 /// or one per vertex of the list): the diff whose edited position `moved` holds exactly, or
 /// kNoSoleEdit; the first search skips the faces whose vertices all hold one diff's edit or the
-/// base, which are that diff's faces (most of a merge where few edits overlap).
+/// base, which are that diff's faces (most of a merge where few edits overlap). `framed`
+/// (empty, or one per vertex of the list): the positions the frames alone gave, before the
+/// hedge (frame_transport.h); the first phase pulls back toward them.
 std::uint32_t repair_new_folds(const Topology& topology, std::span<const Vec3f> base,
                                std::span<const std::uint32_t> vertices,
                                std::span<const Diff* const> diffs,
                                std::span<const std::uint32_t> seam_of, std::span<Vec3f> moved,
                                FoldRepairScratch& scratch, WorkerPool& pool, std::size_t grain,
                                std::span<const double> carrying = {},
-                               std::span<const std::uint8_t> sole = {});
+                               std::span<const std::uint8_t> sole = {},
+                               std::span<const Vec3f> framed = {});
 
 }  // namespace csculpt::detail

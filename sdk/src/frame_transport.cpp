@@ -540,6 +540,7 @@ Vec3f Transport::lone_edit(std::size_t at, std::size_t i) const {
   const Vec3d b = widen(base_[vertices_[at]]);
   const Vec3f result = narrow(add(b, sub(e, b)));
   if (result == narrow(e)) scratch_.sole[at] = static_cast<std::uint8_t>(i);
+  scratch_.framed[at] = result;
   return result;
 }
 
@@ -563,6 +564,7 @@ Vec3f Transport::transported(std::size_t at, const VertexState& s) const {
   bool gathered = false;
   std::fill_n(agrees.begin(), n_, -1.0);
   std::fill_n(vouches.begin(), n_, -1.0);
+  Vec3d framed{};
   for (std::size_t j = 0; j < n_; ++j) {
     if (!s.moves[j]) continue;
     double count = 1;
@@ -599,9 +601,11 @@ Vec3f Transport::transported(std::size_t at, const VertexState& s) const {
       vouched = std::min(vouched, vouches[i]);
       stacked = add(stacked, scale(sub(apply(jacobians[i], stacked), stacked), g));
     }
+    framed = add(framed, count == 1 ? carried : scale(carried, 1.0 / count));
     if (hedged_ && level >= 0) carried = hedge(s.d[j], carried, stacked, vouched);
     sum = add(sum, count == 1 ? carried : scale(carried, 1.0 / count));
   }
+  scratch_.framed[at] = narrow(add(widen(base_[vertices_[at]]), framed));
   return narrow(add(widen(base_[vertices_[at]]), sum));
 }
 
@@ -661,6 +665,7 @@ void transport_positions(
   scratch.normal.resize(vertices.size());
   scratch.carried_here.resize(vertices.size());
   scratch.sole.resize(vertices.size());
+  scratch.framed.resize(vertices.size());
   if (scratch.reads_level.size() < base.size()) scratch.reads_level.resize(base.size(), 0);
   std::fill(scratch.chunk_energy.begin(), scratch.chunk_energy.begin() + n * n, 0.0);
   pool.for_chunks(vertices.size(), grain, [&](std::size_t begin, std::size_t end) {

@@ -114,6 +114,9 @@ struct TransportScratch {
   /// kNoSoleEdit (fold_repair.h: a face all of whose vertices hold one diff's edit or the base
   /// is that diff's face, and cannot be a new fold).
   std::vector<std::uint8_t> sole;
+  /// Per listed vertex: its merged position with the frames alone carrying (no hedge toward
+  /// the stacked reading); the fold repair pulls back toward it where the hedge folds.
+  std::vector<Vec3f> framed;
   /// Per vertex: bit l set when a displacement there reads carrying level l (all clear
   /// between merges).
   std::vector<std::uint8_t> reads_level;

@@ -1252,7 +1252,7 @@ void Merger::Pass::repair_folds(std::span<const std::uint32_t> changed, std::spa
   timings.new_folds_repaired += detail::repair_new_folds(
       hierarchy.topology(), base.positions, changed, std::span(ordered.data(), users),
       ws.transport.seam_of, moved, ws.fold_repair, ws.pool, kBlendGrain, ws.transport.weight,
-      ws.transport.sole);
+      ws.transport.sole, ws.transport.framed);
   timings.fold_repair_ms += ms_since(t0);
 }
 
