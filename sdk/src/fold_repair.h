@@ -4,16 +4,14 @@
 // but where two strong edits overlap (a grab dragged over another artist's bump, a bend closed
 // on a detail) the combination can turn faces inside out although no artist's own edit did: a
 // visible crease or spike (folds.h has the definition every count uses). Such a face is
-// repaired where it appears, unless the artists crumple the surface there themselves (plain
-// addition folds it too, under a coarse edit that carried the others, beside faces an
-// artist's own edit folds: the fold is their edits composed, and what is left is a subset of
-// addition's folds): around its vertices the merged positions are drawn back toward the
+// repaired where it appears: around its vertices the merged positions are drawn back toward the
 // frames' own reading where the hedge toward the stacked reading moved them, then toward plain
-// addition of the edits there (the frames that carried one edit into another undone); where
-// that still folds, the displacement field is smoothed; where even that folds (faces the base
-// already made slivers), the region is drawn toward the shape the edit moving it most gives it,
-// placed where the merge put it; whatever is left is smoothed over a region that widens until
-// it ends. Each acts fully at the fold and less with each ring of neighbours, more strongly on
+// addition of the edits there (the frames that carried one edit into another undone). What
+// still folds is ended two ways from the same start, and the repair keeps the one that leaves
+// fewer folds, then moves the merge less: smoothing the displacement field first, or drawing
+// the region toward the shape the edit moving it most gives it (placed where the merge put it)
+// first, each followed by the other; whatever is left is smoothed over a region that widens
+// until it ends. Each acts fully at the fold and less with each ring of neighbours, more strongly on
 // each attempt and over the neighbours of any face still folded; each phase ends at its best
 // attempt (its start, if none did better). It is local (rings around the faces), leaves every
 // vertex away from them bit-identical, and runs in the canonical order of the merge (so peers
@@ -55,6 +53,10 @@ struct FoldRepairScratch {
   std::vector<std::uint32_t> count;     ///< per part: its seeds
   std::vector<std::uint32_t> region, frontier, next;
   std::vector<Vec3f> start;      ///< per moved vertex: its position when the current phase began
+  std::vector<Vec3f> merged;     ///< per moved vertex: where the transport put it
+  std::vector<Vec3f> pulled;     ///< per moved vertex: where the pulls left it
+  std::vector<Vec3f> tail;       ///< per moved vertex: where smoothing first ended
+  std::vector<std::uint32_t> pulled_folds, tail_folds;  ///< the folds each of those left
   std::vector<double> strength;  ///< per moved vertex: its own pull at full fade (a face pull)
   std::vector<double> pull;      ///< per moved vertex: the pull it takes, faded from the seeds
   std::vector<double> reached, grown;  ///< per moved vertex: the spread of strengths, per ring

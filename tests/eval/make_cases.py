@@ -1,5 +1,5 @@
 # Builds merge cases from edits authored by Blender's own deformers.
-# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|held4|house|extra|crumple|probe4|...|probe12]
+# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|held4|house|extra|crumple|probe4|...|probe13]
 # (Debian 12: apt-get install blender assimp-testmodels). Add your own case() lines to author more.
 # public, public2: the sets of shared/eval/cases (this file began as shared/eval/make_cases.py);
 # held: tests/eval/cases (see its README.md), which also prints what each case holds;
@@ -680,6 +680,12 @@ elif which == "held4":
     case("cast_plus_detail_suzanne_shipped", "suzanne_shipped",
          [lambda o: detail(o, at("-y"), 0.3, 0.04, 160),
           lambda o: cast(o, 0.4)], "stack", details=[0])
+    # from set probe13: a strong detail on the axe's blade under a Smooth of 30 iterations;
+    # the detail folds on the smoothed surface (the frame ideal folds 41 faces anew, addition
+    # 16), and smoothing the last 12 folds flattened it (0.90 against the frame ideal, sum 0.48)
+    case("smooth_plus_strong_detail_axe", "axe",
+         [lambda o: detail(o, at("+x"), 0.25, 0.08, 180),
+          lambda o: smooth(o, at("+x"), 0.6, 1.0, 30)], "stack", details=[0])
 elif which == "held3":
     # regr01.obj, a house of 275 pieces (32 once welded), not welded: every piece subdivided
     # on its own (its walls' large faces get vertices); the grab crushes thin walls, folding
@@ -990,6 +996,34 @@ elif which == "probe12":
     case("grab_plus_strong_detail_axe", "axe",
          [lambda o: detail(o, at("+x"), 0.25, 0.1, 173),
           lambda o: grab(o, at("+x"), at("+x", 1, (0.1, 0.05, 0.1)), 0.5)], "stack", details=[0])
+elif which == "probe13":
+    # a Smooth as the coarse edit over sideways and normal details, on meshes other than the
+    # monkey of probe6 (where a Smooth under a pinch measures as the finer edit); scored by hand
+    case("smooth_plus_pinch_torus", "torus_lo",
+         [lambda o: pinch(o, (1.0, 0, 0.25), 0.2, 0.6),
+          lambda o: smooth(o, (1.0, 0, 0.2), 0.7, 1.0, 20)], "stack", details=[0])
+    case("smooth_plus_pinch_wuson", "wuson",
+         [lambda o: pinch(o, at("+y"), 0.2, 0.6),
+          lambda o: smooth(o, at("+y"), 0.6, 1.0, 20)], "stack", details=[0])
+    case("smooth_plus_tinygrab_human", "human",
+         [lambda o: tiny_grab(o, at("+x"), (0, 0.02, 0.02), 0.15),
+          lambda o: smooth(o, at("+x"), 0.5, 1.0, 20)], "stack", details=[0])
+    case("smooth_plus_swirl_duck", "duck",
+         [lambda o: local_twist(o, *LM["+z"], 0.2, math.radians(50)),
+          lambda o: smooth(o, at("+z"), 0.6, 1.0, 20)], "stack", details=[0])
+    case("smooth_plus_strong_detail_axe", "axe",
+         [lambda o: detail(o, at("+x"), 0.25, 0.08, 180),
+          lambda o: smooth(o, at("+x"), 0.6, 1.0, 30)], "stack", details=[0])
+    case("smooth_plus_pinch_suzanne_shipped", "suzanne_shipped",
+         [lambda o: pinch(o, at("-y"), 0.25, 0.6),
+          lambda o: smooth(o, at("-y"), 0.8, 1.0, 20)], "stack", details=[0])
+    case("three_artists_smooth_torus", "torus_lo",
+         [lambda o: detail(o, (1.0, 0, 0.3), 0.25, 0.04, 181),
+          lambda o: tiny_grab(o, (1.1, 0.2, 0.2), (0, 0.03, 0.02), 0.15),
+          lambda o: smooth(o, (1.0, 0, 0.2), 0.8, 1.0, 20)], "stack", details=[0, 1])
+    case("smooth_plus_pinch_capsule", "capsule_lo",
+         [lambda o: pinch(o, (0.4, 0, 0.5), 0.2, 0.6),
+          lambda o: smooth(o, (0.4, 0, 0.5), 0.6, 1.0, 30)], "stack", details=[0])
 elif which == "house":
     house_grab_case()
     case("cast_plus_detail_house", "house",

@@ -153,11 +153,10 @@ std::pair<std::uint32_t, std::uint32_t> repair_carried(const Mesh& base, const D
 
 // A coarse stroke that nearly flattens two faces (c pushed 0.99 of an edge toward its right
 // neighbour) and folds a face beside them itself, carrying another artist's stroke that moves
-// c by a fiftieth of an edge: added, the two faces turn over. The coarse stroke's own fold is
-// beside them and addition folds them too, which the repair leaves alone as the artists
-// crumpling the surface only where the carried detail is a tenth of an edge or more: here
-// there is no detail to lose, so it repairs them (a quiet four-peer demo merge left two such
-// folds).
+// c by a fiftieth of an edge: added, the two faces turn over. Addition folds them too and the
+// coarse stroke's own fold is beside them, but no artist folded these two: the repair ends
+// them (left as the artists' crumpling, such folds stayed in quiet four-peer demos, seeds 3
+// and 11).
 TEST(FoldRepair, RepairsAFoldATinyCarriedStrokeTipsBesideTheCarriersOwn) {
   const std::uint32_t n = 25, c = 12 * n + 12;
   const Mesh base = grid(n);
@@ -180,9 +179,9 @@ TEST(FoldRepair, RepairsAFoldATinyCarriedStrokeTipsBesideTheCarriersOwn) {
 // A coarse stroke lifts c and pushes it 0.99 of an edge toward its right neighbour (two faces
 // nearly on edge), carrying another artist's pinch that pushes c on by 0.13 of an edge and
 // folds faces of its own around c's upper neighbour. Added, the two faces turn over. The fold
-// beside is the carried pinch's, not the coarse stroke's: the coarse stroke moved the pinch's
-// crumple there, and the repair ends it (a grab carrying a pinch that folded a hundred faces of
-// its own left one to three such folds in quiet four-peer demos).
+// beside is the carried pinch's: the coarse stroke moved the pinch's crumple there, and the
+// repair ends it (a grab carrying a pinch that folded a hundred faces of its own left one to
+// three such folds in quiet four-peer demos).
 TEST(FoldRepair, RepairsAFoldBesideACarriedDetailsOwnCrumple) {
   const std::uint32_t n = 25, c = 12 * n + 12;
   const Mesh base = grid(n);
