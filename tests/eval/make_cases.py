@@ -686,6 +686,11 @@ elif which == "held4":
     case("smooth_plus_strong_detail_axe", "axe",
          [lambda o: detail(o, at("+x"), 0.25, 0.08, 180),
           lambda o: smooth(o, at("+x"), 0.6, 1.0, 30)], "stack", details=[0])
+    # from set probe13: a pinch on the shipped Suzanne's face under a Smooth of it; the pinch
+    # read as the coarser edit and carried the Smooth (0.434 against the frame ideal, sum 0.367)
+    case("smooth_plus_pinch_suzanne_shipped", "suzanne_shipped",
+         [lambda o: pinch(o, at("-y"), 0.25, 0.6),
+          lambda o: smooth(o, at("-y"), 0.8, 1.0, 20)], "stack", details=[0])
 elif which == "held3":
     # regr01.obj, a house of 275 pieces (32 once welded), not welded: every piece subdivided
     # on its own (its walls' large faces get vertices); the grab crushes thin walls, folding
