@@ -596,6 +596,18 @@ def at(name, scale=1.0, offset=(0, 0, 0)):
 def plus(p, d):
     return tuple(a + b for a, b in zip(p, d))
 
+def smooth_axe_case():
+    """a strong detail on the axe's blade under a Smooth of 30 iterations"""
+    case("smooth_plus_strong_detail_axe", "axe",
+         [lambda o: detail(o, at("+x"), 0.25, 0.08, 180),
+          lambda o: smooth(o, at("+x"), 0.6, 1.0, 30)], "stack", details=[0])
+
+def smooth_suzanne_pinch_case():
+    """a pinch on the shipped Suzanne's face under a Smooth of it"""
+    case("smooth_plus_pinch_suzanne_shipped", "suzanne_shipped",
+         [lambda o: pinch(o, at("-y"), 0.25, 0.6),
+          lambda o: smooth(o, at("-y"), 0.8, 1.0, 20)], "stack", details=[0])
+
 def house_grab_case():
     """a detail on a roof of the house and a grab over it that crushes thin walls"""
     case("grab_plus_detail_house", "house",
@@ -683,14 +695,7 @@ elif which == "held4":
     # from set probe13: a strong detail on the axe's blade under a Smooth of 30 iterations;
     # the detail folds on the smoothed surface (the frame ideal folds 41 faces anew, addition
     # 16), and smoothing the last 12 folds flattened it (0.90 against the frame ideal, sum 0.48)
-    case("smooth_plus_strong_detail_axe", "axe",
-         [lambda o: detail(o, at("+x"), 0.25, 0.08, 180),
-          lambda o: smooth(o, at("+x"), 0.6, 1.0, 30)], "stack", details=[0])
-    # from set probe13: a pinch on the shipped Suzanne's face under a Smooth of it; the pinch
-    # read as the coarser edit and carried the Smooth (0.434 against the frame ideal, sum 0.367)
-    case("smooth_plus_pinch_suzanne_shipped", "suzanne_shipped",
-         [lambda o: pinch(o, at("-y"), 0.25, 0.6),
-          lambda o: smooth(o, at("-y"), 0.8, 1.0, 20)], "stack", details=[0])
+    smooth_axe_case()
 elif which == "held3":
     # regr01.obj, a house of 275 pieces (32 once welded), not welded: every piece subdivided
     # on its own (its walls' large faces get vertices); the grab crushes thin walls, folding
@@ -1016,12 +1021,8 @@ elif which == "probe13":
     case("smooth_plus_swirl_duck", "duck",
          [lambda o: local_twist(o, *LM["+z"], 0.2, math.radians(50)),
           lambda o: smooth(o, at("+z"), 0.6, 1.0, 20)], "stack", details=[0])
-    case("smooth_plus_strong_detail_axe", "axe",
-         [lambda o: detail(o, at("+x"), 0.25, 0.08, 180),
-          lambda o: smooth(o, at("+x"), 0.6, 1.0, 30)], "stack", details=[0])
-    case("smooth_plus_pinch_suzanne_shipped", "suzanne_shipped",
-         [lambda o: pinch(o, at("-y"), 0.25, 0.6),
-          lambda o: smooth(o, at("-y"), 0.8, 1.0, 20)], "stack", details=[0])
+    smooth_axe_case()
+    smooth_suzanne_pinch_case()
     case("three_artists_smooth_torus", "torus_lo",
          [lambda o: detail(o, (1.0, 0, 0.3), 0.25, 0.04, 181),
           lambda o: tiny_grab(o, (1.1, 0.2, 0.2), (0, 0.03, 0.02), 0.15),
