@@ -168,24 +168,6 @@ struct Repair {
                                face_normal(position(t[0]), position(t[1]), position(t[2])));
   }
 
-  /// Whether diff `best` carried every other diff with a displacement there (the transport's
-  /// w >= 0.5) and moves it kKeepRatio times more than all of them together; `energy(j)` is
-  /// diff j's squared displacement there.
-  template <class Energy>
-  bool carries_all(std::size_t best, Energy&& energy) const {
-    const std::size_t n = diffs.size();
-    if (carrying.size() != n * n) return false;
-    double others = 0;
-    for (std::size_t j = 0; j < n; ++j) {
-      if (j == best) continue;
-      const double e = energy(j);
-      if (!(e > 0)) continue;
-      if (carrying[best * n + j] < 0.5) return false;
-      others += e;
-    }
-    return energy(best) >= kKeepRatio * others;
-  }
-
   /// Vertex `v` with every diff's displacement added.
   Vec3d addition(std::uint32_t v) const {
     const Vec3d b = widen(base[v]);
@@ -392,7 +374,15 @@ struct Repair {
   /// it carried every other diff moving the part in the transport (a coarse edit under
   /// details), and moves the part kKeepRatio times more than all of them together.
   bool keeps_dominant(std::size_t best) const {
-    return carries_all(best, [&](std::size_t j) { return s.energy[j]; });
+    const std::size_t n = diffs.size();
+    if (carrying.size() != n * n) return false;
+    double others = 0;
+    for (std::size_t j = 0; j < n; ++j) {
+      if (j == best || !(s.energy[j] > 0)) continue;
+      if (carrying[best * n + j] < 0.5) return false;  // the transport's w >= 0.5
+      others += s.energy[j];
+    }
+    return s.energy[best] >= kKeepRatio * others;
   }
 
   void add_displacement_energy(std::uint32_t v) {
@@ -515,7 +505,7 @@ struct Repair {
     std::fill(s.seed.begin(), s.seed.end(), 0);
     s.strength.assign(moved.size(), 0.0);
     const std::size_t found = s.folds.size();
-    keep_best();
+    save(s.best);
     for (int attempt = 0; attempt < phase.attempts && !s.folds.empty(); ++attempt) {
       seed_folded_faces();
       const std::uint32_t rings = phase.rings_at(attempt);
@@ -539,10 +529,10 @@ struct Repair {
         weld_seams();
       }
       collect_region_folds();
-      if (s.folds.size() < s.best_folds.size()) keep_best();
+      if (s.folds.size() < s.best.folds.size()) save(s.best);
       if (diverges(phase, attempt, found)) break;
     }
-    if (s.folds.size() > s.best_folds.size()) back_to_best();
+    if (s.folds.size() > s.best.folds.size()) restore(s.best);
   }
 
   /// Whether a pull at full strength has left more than twice the `found` folds its phase
@@ -554,37 +544,34 @@ struct Repair {
            s.folds.size() > 2 * found;
   }
 
-  /// Remembers the positions, folds and seeds of the phase's best attempt so far.
-  void keep_best() {
-    s.best.assign(moved.begin(), moved.end());
-    s.best_folds.assign(s.folds.begin(), s.folds.end());
-    s.best_seed.assign(s.seed.begin(), s.seed.end());
+  /// Remembers every moved vertex's position, the folds and the seeds in `into`.
+  void save(FoldRepairScratch::Snapshot& into) const {
+    into.positions.assign(moved.begin(), moved.end());
+    into.folds.assign(s.folds.begin(), s.folds.end());
+    into.seed.assign(s.seed.begin(), s.seed.end());
   }
 
-  /// Puts every vertex back where the phase's best attempt left it, with its folds and seeds.
-  void back_to_best() {
-    std::copy(s.best.begin(), s.best.end(), moved.begin());
-    s.folds.assign(s.best_folds.begin(), s.best_folds.end());
-    s.seed.assign(s.best_seed.begin(), s.best_seed.end());
+  /// Puts every vertex back where `from` has it, with its folds and seeds.
+  void restore(const FoldRepairScratch::Snapshot& from) {
+    std::copy(from.positions.begin(), from.positions.end(), moved.begin());
+    s.folds.assign(from.folds.begin(), from.folds.end());
+    s.seed.assign(from.seed.begin(), from.seed.end());
   }
+
 
   /// Ends the folds the pulls left by both orders (kSmoothFirst, kShapeFirst) from the same
   /// start, and keeps the better: fewer folds, then less movement from the merge.
   void run_better_tail() {
-    s.pulled.assign(moved.begin(), moved.end());
-    s.pulled_folds.assign(s.folds.begin(), s.folds.end());
+    save(s.pulled);
     for (const Phase& phase : kSmoothFirst) run(phase);
-    s.tail.assign(moved.begin(), moved.end());
-    s.tail_folds.assign(s.folds.begin(), s.folds.end());
-    std::copy(s.pulled.begin(), s.pulled.end(), moved.begin());
-    s.folds.assign(s.pulled_folds.begin(), s.pulled_folds.end());
+    save(s.tail);
+    restore(s.pulled);
     for (const Phase& phase : kShapeFirst) run(phase);
-    const std::size_t smoothed = s.tail_folds.size(), shaped = s.folds.size();
+    const std::size_t smoothed = s.tail.folds.size(), shaped = s.folds.size();
     if (shaped < smoothed ||
-        (shaped == smoothed && change_from_merge(moved) < change_from_merge(s.tail)))
+        (shaped == smoothed && change_from_merge(moved) < change_from_merge(s.tail.positions)))
       return;
-    std::copy(s.tail.begin(), s.tail.end(), moved.begin());
-    s.folds.assign(s.tail_folds.begin(), s.tail_folds.end());
+    restore(s.tail);
   }
 
   /// Summed squared distance of the moved vertices at `at` from where the transport put them.

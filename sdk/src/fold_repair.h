@@ -38,9 +38,15 @@ constexpr std::uint8_t kNoSoleEdit = 0xff;
 struct FoldRepairScratch {
   std::vector<std::uint32_t> slot;   ///< per vertex: index in the moved list; kNone between calls
   std::vector<std::uint32_t> folds;  ///< faces currently folded anew
-  std::vector<Vec3f> best;           ///< per moved vertex: at the phase's best attempt
-  std::vector<std::uint32_t> best_folds;                ///< the folds the best attempt left
-  std::vector<std::uint8_t> best_seed;                  ///< the seeds when the best attempt ended
+  /// The repair's state at one moment: every moved vertex's position, the folds left, the seeds.
+  struct Snapshot {
+    std::vector<Vec3f> positions;
+    std::vector<std::uint32_t> folds;
+    std::vector<std::uint8_t> seed;
+  };
+  Snapshot best;    ///< at the phase's best attempt
+  Snapshot pulled;  ///< where the pulls left it
+  Snapshot tail;    ///< where smoothing first ended
   std::vector<std::vector<std::uint32_t>> chunk_folds;  ///< the first search's, per chunk
   std::vector<std::uint8_t> seed;       ///< per moved vertex: on a folded face in some attempt
   std::vector<std::uint32_t> ring;      ///< per moved vertex: rings from the nearest seed, or kNone
@@ -54,9 +60,6 @@ struct FoldRepairScratch {
   std::vector<std::uint32_t> region, frontier, next;
   std::vector<Vec3f> start;      ///< per moved vertex: its position when the current phase began
   std::vector<Vec3f> merged;     ///< per moved vertex: where the transport put it
-  std::vector<Vec3f> pulled;     ///< per moved vertex: where the pulls left it
-  std::vector<Vec3f> tail;       ///< per moved vertex: where smoothing first ended
-  std::vector<std::uint32_t> pulled_folds, tail_folds;  ///< the folds each of those left
   std::vector<double> strength;  ///< per moved vertex: its own pull at full fade (a face pull)
   std::vector<double> pull;      ///< per moved vertex: the pull it takes, faded from the seeds
   std::vector<double> reached, grown;  ///< per moved vertex: the spread of strengths, per ring
