@@ -608,6 +608,12 @@ def smooth_suzanne_pinch_case():
          [lambda o: pinch(o, at("-y"), 0.25, 0.6),
           lambda o: smooth(o, at("-y"), 0.8, 1.0, 20)], "stack", details=[0])
 
+def smooth_human_grab_case():
+    """a small grab on the human figure's side under a Smooth of it"""
+    case("smooth_plus_tinygrab_human", "human",
+         [lambda o: tiny_grab(o, at("+x"), (0, 0.02, 0.02), 0.15),
+          lambda o: smooth(o, at("+x"), 0.5, 1.0, 20)], "stack", details=[0])
+
 def house_grab_case():
     """a detail on a roof of the house and a grab over it that crushes thin walls"""
     case("grab_plus_detail_house", "house",
@@ -696,6 +702,12 @@ elif which == "held4":
     # the detail folds on the smoothed surface (the frame ideal folds 41 faces anew, addition
     # 16), and smoothing the last 12 folds flattened it (0.90 against the frame ideal, sum 0.48)
     smooth_axe_case()
+    # from set probe13: a pinch on the shipped Suzanne's face under a Smooth of it; the pinch
+    # read as the coarser edit and carried the Smooth (0.434 against the frame ideal, sum 0.367)
+    smooth_suzanne_pinch_case()
+    # from set probe13: a small grab on the human figure under a Smooth; read as the coarser
+    # edit where the two meet (0.155 against the frame ideal, sum 0.155)
+    smooth_human_grab_case()
 elif which == "held3":
     # regr01.obj, a house of 275 pieces (32 once welded), not welded: every piece subdivided
     # on its own (its walls' large faces get vertices); the grab crushes thin walls, folding
@@ -1015,9 +1027,7 @@ elif which == "probe13":
     case("smooth_plus_pinch_wuson", "wuson",
          [lambda o: pinch(o, at("+y"), 0.2, 0.6),
           lambda o: smooth(o, at("+y"), 0.6, 1.0, 20)], "stack", details=[0])
-    case("smooth_plus_tinygrab_human", "human",
-         [lambda o: tiny_grab(o, at("+x"), (0, 0.02, 0.02), 0.15),
-          lambda o: smooth(o, at("+x"), 0.5, 1.0, 20)], "stack", details=[0])
+    smooth_human_grab_case()
     case("smooth_plus_swirl_duck", "duck",
          [lambda o: local_twist(o, *LM["+z"], 0.2, math.radians(50)),
           lambda o: smooth(o, at("+z"), 0.6, 1.0, 20)], "stack", details=[0])

@@ -38,6 +38,19 @@ def same_bits(pa, ca, pb, cb):
             all(np.array_equal(meshes.bits(ca[k]), meshes.bits(cb[k])) for k in ca))
 
 
+def synced(hosts, pending, strokes):
+    """One round of two artists' hosts ("a" and "b": session, positions, channels): each
+    updates and submits its pending strokes. True once both hold the same version, bit for bit,
+    and a has `strokes` acknowledged."""
+    for key, (session, p, c) in hosts.items():
+        session.update(p, c)
+        if session.submit(p, c, strokes=pending[key]):
+            pending[key] = 0
+    (a, pa, ca), (b, pb, cb) = hosts["a"], hosts["b"]
+    return (a.version == b.version and a.stats.strokes_acknowledged == strokes and
+            same_bits(pa, ca, pb, cb))
+
+
 def wait_for(condition, what, deadline_s=DEADLINE_S):
     end = time.monotonic() + deadline_s
     while not condition():
@@ -221,21 +234,14 @@ class Undo(unittest.TestCase):
             pending = {"a": 1, "b": 1}
             hosts = {"a": (a, pa, ca), "b": (b, pb, cb)}
 
-            def converged(strokes):
-                for key, (session, p, c) in hosts.items():
-                    session.update(p, c)
-                    if session.submit(p, c, strokes=pending[key]):
-                        pending[key] = 0
-                return (a.version == b.version and a.stats.strokes_acknowledged == strokes and
-                        same_bits(pa, ca, pb, cb))
-
-            wait_for(lambda: converged(1) and b.stats.strokes_acknowledged == 1, "both strokes")
+            wait_for(lambda: synced(hosts, pending, 1) and b.stats.strokes_acknowledged == 1,
+                     "both strokes")
             both = pa.copy()
             changed = a.undo(pa, ca)
             self.assertGreater(changed.size, 0)
             self.assertEqual(a.undo_depth, (0, 1))
             pending["a"] = 1
-            wait_for(lambda: converged(2), "the undo on both peers")
+            wait_for(lambda: synced(hosts, pending, 2), "the undo on both peers")
             tolerance = 4 * csculpt.SESSION_OPTIONS["position_tolerance"] * mesh.bbox_diagonal
             only_mine = np.zeros(len(pa), bool)
             only_mine[mine] = True
@@ -265,6 +271,44 @@ class Undo(unittest.TestCase):
             with self.assertRaises(csculpt.InvalidArgument):
                 a.record_stroke(pa, [1, 2], np.zeros((1, stride)), ca)  # too few values
             self.assertEqual(a.undo_depth, (0, 1), "a refused stroke changed the history")
+
+    def test_undoing_a_broad_stroke_stands_a_detail_made_on_it_upright_again(self):
+        # a drags the whole north cap sideways; b raises a small bump on the slope it made. When
+        # a takes the drag back, the bump goes back with the surface it was made on: upright on
+        # the sphere, as tall as b made it, and nothing else of a's drag stays.
+        with material_sphere(4) as mesh, csculpt.Session.create(mesh, id=1, **FAST) as a, \
+                csculpt.Session.join(a.invite, id=2, join_timeout_ms=10000, **FAST) as b:
+            base_p, _ = host_arrays(mesh)
+            pa, ca = host_arrays(mesh)
+            with b.base() as b_base:
+                pb, cb = host_arrays(b_base)
+            before = np.concatenate([pa] + [c.reshape(len(pa), -1) for c in ca.values()], axis=1)
+            pa[:] = meshes.grab(pa, (0, 0, 1), 0.9, (0.35, 0, 0))
+            mine = np.flatnonzero(np.any(pa != base_p, axis=1))
+            a.record_stroke(pa, mine, before[mine], ca)
+            top = np.array([0.3, 0, 0.954], np.float32)
+            top /= np.linalg.norm(top)
+            pb[:] = meshes.grab(pb, top, 0.2, 0.06 * top)
+            theirs = np.flatnonzero(np.any(pb != base_p, axis=1))
+            self.assertGreater(len(mine), 4 * len(theirs))
+            pending = {"a": 1, "b": 1}
+            hosts = {"a": (a, pa, ca), "b": (b, pb, cb)}
+
+            wait_for(lambda: synced(hosts, pending, 1) and b.stats.strokes_acknowledged == 1,
+                     "both strokes")
+            self.assertGreater(a.undo(pa, ca).size, 0)
+            pending["a"] = 1
+            wait_for(lambda: synced(hosts, pending, 2), "the undo on both peers")
+            for p in (pa, pb):
+                lift = p[theirs] - base_p[theirs]
+                peak = int(np.argmax(np.linalg.norm(lift, axis=1)))
+                self.assertGreater(float(np.linalg.norm(lift[peak])), 0.8 * 0.06, "the bump shrank")
+                tilt = np.degrees(np.arccos(np.dot(lift[peak], top) / np.linalg.norm(lift[peak])))
+                self.assertLess(float(tilt), 8.0, "the bump kept the undone drag's slope")
+                alone = np.setdiff1d(mine, theirs)
+                far = alone[np.linalg.norm(base_p[alone] - top, axis=1) > 0.35]
+                self.assertGreater(len(far), 100)
+                np.testing.assert_allclose(p[far], base_p[far], rtol=0, atol=0.002)
 
 
 class PresenceAndPeers(unittest.TestCase):
