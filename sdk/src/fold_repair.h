@@ -4,15 +4,17 @@
 // but where two strong edits overlap (a grab dragged over another artist's bump, a bend closed
 // on a detail) the combination can turn faces inside out although no artist's own edit did: a
 // visible crease or spike (folds.h has the definition every count uses). Such a face is
-// repaired where it appears: around its vertices the merged positions are drawn back toward the
+// repaired where it appears. Where a coarse edit carried a detail that folds (its own crumpling
+// ridden a little further), each folded face is first nudged open by the least move of its
+// vertices. Then around its vertices the merged positions are drawn back toward the
 // frames' own reading where the hedge toward the stacked reading moved them, then toward plain
 // addition of the edits there (the frames that carried one edit into another undone). What
 // still folds is ended two ways from the same start, and the repair keeps the one that leaves
 // fewer folds, then moves the merge less: smoothing the displacement field first, or drawing
 // the region toward the shape the edit moving it most gives it (placed where the merge put it)
 // first, each followed by the other; whatever is left is smoothed over a region that widens
-// until it ends. Each acts fully at the fold and less with each ring of neighbours, more strongly on
-// each attempt and over the neighbours of any face still folded; each phase ends at its best
+// until it ends. Each acts fully at the fold and less with each ring of neighbours, more strongly
+// on each attempt and over the neighbours of any face still folded; each phase ends at its best
 // attempt (its start, if none did better). It is local (rings around the faces), leaves every
 // vertex away from them bit-identical, and runs in the canonical order of the merge (so peers
 // agree bitwise). Where nothing folds it costs one face test around each moved vertex and
@@ -44,9 +46,9 @@ struct FoldRepairScratch {
     std::vector<std::uint32_t> folds;
     std::vector<std::uint8_t> seed;
   };
-  Snapshot best;    ///< at the phase's best attempt
-  Snapshot pulled;  ///< where the pulls left it
-  Snapshot tail;    ///< where smoothing first ended
+  Snapshot best;                                        ///< at the phase's best attempt
+  Snapshot pulled;                                      ///< where the pulls left it
+  Snapshot tail;                                        ///< where smoothing first ended
   std::vector<std::vector<std::uint32_t>> chunk_folds;  ///< the first search's, per chunk
   std::vector<std::uint8_t> seed;       ///< per moved vertex: on a folded face in some attempt
   std::vector<std::uint32_t> ring;      ///< per moved vertex: rings from the nearest seed, or kNone

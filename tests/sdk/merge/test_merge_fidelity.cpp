@@ -371,8 +371,9 @@ Mesh crumpled(const Mesh& base, Vec3f c, float h, float r) {
 // so the fold repair must open them (addition folds none). Pulling every face it touched
 // toward addition until the last one opened, then smoothing every face that had ever folded,
 // spent most of the detail: 0.36 against the frame ideal here, 0.43x addition's error (on a
-// crumpled Wuson twisted 120 degrees, 0.73 against addition's 0.76). Each face now pulls only
-// as hard as it needs and each phase works on the folds left: 0.28 (0.33x).
+// crumpled Wuson twisted 120 degrees, 0.73 against addition's 0.76). Each face pulling only
+// as hard as it needs and each phase working on the folds left: 0.28 (0.33x). Nudged open by
+// the least move of their vertices first (the twist carried the detail there): 0.19 (0.22x).
 TEST(MergeFidelity, ACrumpledDetailUnderATwistIsRepairedOnlyWhereItFolds) {
   const Mesh base = make_sphere(20000);
   const Hierarchy h = Hierarchy::build(base);
@@ -394,7 +395,7 @@ TEST(MergeFidelity, ACrumpledDetailUnderATwistIsRepairedOnlyWhereItFolds) {
               e_full, e_sum, folds_full, folds_sum, folds_ideal);
   EXPECT_GT(folds_ideal, 2 * folds_sum) << "the detail does not fold where the twist turns it";
   EXPECT_LE(folds_full, folds_sum);
-  EXPECT_LT(e_full, 0.38 * e_sum);
+  EXPECT_LT(e_full, 0.26 * e_sum);
 }
 
 /// The sphere cut along the plane y = 0 for x > 0: the faces on the y < 0 side get their own
