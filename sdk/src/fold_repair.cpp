@@ -529,7 +529,7 @@ struct Repair {
     for (std::uint32_t f : s.folds) {
       const Triangle& t = topology.triangles[f];
       if (!under_coarse_edit(t)) continue;
-      const Vec3d b = face_normal(widen(base[t[0]]), widen(base[t[1]]), widen(base[t[2]]));
+      const Vec3d b = base_normal(base, t);
       const double area = length(b);
       if (!(area > 0)) continue;
       const Vec3d n = scale(b, 1 / area);
