@@ -1048,6 +1048,42 @@ elif which == "probe13":
     case("smooth_plus_pinch_capsule", "capsule_lo",
          [lambda o: pinch(o, (0.4, 0, 0.5), 0.2, 0.6),
           lambda o: smooth(o, (0.4, 0, 0.5), 0.6, 1.0, 30)], "stack", details=[0])
+elif which == "probe14":
+    # crumpling and strong details (strength 0.08 - 0.12: they fold faces themselves, or nearly)
+    # under every coarse kind, on meshes of one and of many parts, to try the repair's nudge on
+    # cases it was not made on; scored by hand, not kept
+    case("cast_plus_crumpling_detail_duck", "duck",
+         [lambda o: detail(o, at("+z"), 0.3, 0.1, 190),
+          lambda o: cast(o, 0.4)], "stack", details=[0])
+    case("taper_plus_crumpling_detail_capsule", "capsule_lo",
+         [lambda o: detail(o, (0.4, 0, 0.5), 0.3, 0.1, 191),
+          lambda o: simple(o, 'TAPER', 0.6, 'Z')], "stack", details=[0])
+    case("grab_plus_crumpling_detail_human", "human",
+         [lambda o: detail(o, at("+x"), 0.25, 0.08, 192),
+          lambda o: grab(o, at("+x"), at("+x", 1, (0.1, 0.05, 0.1)), 0.5)], "stack", details=[0])
+    case("stretch_plus_crumpling_detail_mocap", "mocap",
+         [lambda o: detail(o, at("+x"), 0.3, 0.1, 193),
+          lambda o: simple(o, 'STRETCH', 0.3, 'Z')], "stack", details=[0])
+    case("wave_plus_crumpling_detail_monkey", "monkey2",
+         [lambda o: detail(o, at("+z"), 0.3, 0.1, 194),
+          lambda o: wave(o, 0.1, 0.5)], "stack", details=[0])
+    case("twist_plus_crumpling_detail_cubes", "cubes",
+         [lambda o: detail(o, at("+x"), 0.3, 0.1, 195),
+          lambda o: twist(o, math.radians(60), 'Z')], "stack", details=[0])
+    case("twist_plus_crumpling_detail_suzanne_shipped", "suzanne_shipped",
+         [lambda o: detail(o, at("-y"), 0.3, 0.1, 196),
+          lambda o: twist(o, math.radians(60), 'Z')], "stack", details=[0])
+    case("cast_part_plus_crumpling_detail_torus", "torus_lo",
+         [lambda o: detail(o, (1, 0, 0.3), 0.3, 0.1, 197),
+          lambda o: cast_part(o, 0.8, (1, 0, 0.3), 0.6)], "stack", details=[0])
+    case("bend_plus_crumpling_detail_spider_shipped", "spider_shipped",
+         [lambda o: detail_along(o, at("+y"), 0.3, 0.1, 198, 'Y'),
+          lambda o: bend(o, math.radians(90), 'X')], "stack", details=[0])
+    case("four_artists_crumpling_axe", "axe",
+         [lambda o: detail(o, at("+x"), 0.25, 0.08, 199),
+          lambda o: pinch(o, at("-x"), 0.15, 0.6),
+          lambda o: tiny_grab(o, at("+x"), (0, 0.03, 0.02), 0.15),
+          lambda o: cast(o, 0.3)], "stack", details=[0, 1, 2])
 elif which == "house":
     house_grab_case()
     case("cast_plus_detail_house", "house",
