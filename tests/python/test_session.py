@@ -2,6 +2,7 @@
 own numpy arrays in place, converging bit for bit; events, statistics, attribution, leaving,
 and the errors raised for bad invites, options and host arrays."""
 
+import contextlib
 import gc
 import os
 import tempfile
@@ -36,6 +37,19 @@ def host_arrays(mesh):
 def same_bits(pa, ca, pb, cb):
     return (np.array_equal(meshes.bits(pa), meshes.bits(pb)) and ca.keys() == cb.keys() and
             all(np.array_equal(meshes.bits(ca[k]), meshes.bits(cb[k])) for k in ca))
+
+
+@contextlib.contextmanager
+def two_artists(subdivisions=4):
+    """A session of two artists on a material sphere: (mesh, the base positions, hosts), hosts
+    as synced() takes them, each host's arrays its own copies of the base."""
+    with material_sphere(subdivisions) as mesh, csculpt.Session.create(mesh, id=1, **FAST) as a, \
+            csculpt.Session.join(a.invite, id=2, join_timeout_ms=10000, **FAST) as b:
+        base_p, _ = host_arrays(mesh)
+        pa, ca = host_arrays(mesh)
+        with b.base() as b_base:
+            pb, cb = host_arrays(b_base)
+        yield mesh, base_p, {"a": (a, pa, ca), "b": (b, pb, cb)}
 
 
 def synced(hosts, pending, strokes):
@@ -215,12 +229,8 @@ class Journal(unittest.TestCase):
 class Undo(unittest.TestCase):
 
     def test_undo_takes_back_my_stroke_on_both_peers_and_keeps_theirs(self):
-        with material_sphere(4) as mesh, csculpt.Session.create(mesh, id=1, **FAST) as a, \
-                csculpt.Session.join(a.invite, id=2, join_timeout_ms=10000, **FAST) as b:
-            base_p, _ = host_arrays(mesh)
-            pa, ca = host_arrays(mesh)
-            with b.base() as b_base:
-                pb, cb = host_arrays(b_base)
+        with two_artists() as (mesh, base_p, hosts):
+            (a, pa, ca), (b, pb, cb) = hosts["a"], hosts["b"]
             stride = 3 + 3 + 1 + 1
             # a grabs the north cap sideways and records it for undo ...
             before = np.concatenate([pa] + [c.reshape(len(pa), -1) for c in ca.values()], axis=1)
@@ -232,7 +242,6 @@ class Undo(unittest.TestCase):
             pb[:] = meshes.grab(pb, (0.6, 0, 0.8), 0.6, (0, 0, 0.2))
             theirs = np.any(pb != base_p, axis=1)
             pending = {"a": 1, "b": 1}
-            hosts = {"a": (a, pa, ca), "b": (b, pb, cb)}
 
             wait_for(lambda: synced(hosts, pending, 1) and b.stats.strokes_acknowledged == 1,
                      "both strokes")
@@ -276,12 +285,8 @@ class Undo(unittest.TestCase):
         # a drags the whole north cap sideways; b raises a small bump on the slope it made. When
         # a takes the drag back, the bump goes back with the surface it was made on: upright on
         # the sphere, as tall as b made it, and nothing else of a's drag stays.
-        with material_sphere(4) as mesh, csculpt.Session.create(mesh, id=1, **FAST) as a, \
-                csculpt.Session.join(a.invite, id=2, join_timeout_ms=10000, **FAST) as b:
-            base_p, _ = host_arrays(mesh)
-            pa, ca = host_arrays(mesh)
-            with b.base() as b_base:
-                pb, cb = host_arrays(b_base)
+        with two_artists() as (_, base_p, hosts):
+            (a, pa, ca), (b, pb, cb) = hosts["a"], hosts["b"]
             before = np.concatenate([pa] + [c.reshape(len(pa), -1) for c in ca.values()], axis=1)
             pa[:] = meshes.grab(pa, (0, 0, 1), 0.9, (0.35, 0, 0))
             mine = np.flatnonzero(np.any(pa != base_p, axis=1))
@@ -292,7 +297,6 @@ class Undo(unittest.TestCase):
             theirs = np.flatnonzero(np.any(pb != base_p, axis=1))
             self.assertGreater(len(mine), 4 * len(theirs))
             pending = {"a": 1, "b": 1}
-            hosts = {"a": (a, pa, ca), "b": (b, pb, cb)}
 
             wait_for(lambda: synced(hosts, pending, 1) and b.stats.strokes_acknowledged == 1,
                      "both strokes")
