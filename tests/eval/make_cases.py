@@ -620,6 +620,12 @@ def cast_part_human_swirl_case():
          [lambda o: local_twist(o, *LM["+z"], 0.2, math.radians(60)),
           lambda o: cast_part(o, 0.8, at("+z"), 0.6)], "stack", details=[0])
 
+def smooth_wide_human_grab_case():
+    """a small grab on the human figure's side under a Smooth barely wider than it"""
+    case("smooth_plus_wide_tinygrab_human", "human",
+         [lambda o: tiny_grab(o, at("+x"), (0, 0.02, 0.02), 0.3),
+          lambda o: smooth(o, at("+x"), 0.4, 1.0, 20)], "stack", details=[0])
+
 def house_grab_case():
     """a detail on a roof of the house and a grab over it that crushes thin walls"""
     case("grab_plus_detail_house", "house",
@@ -718,6 +724,10 @@ elif which == "held4":
     # faces itself (the frame ideal 174); ending the merge's folds by smoothing moved the swirl
     # (0.310 against the frame ideal, sum 0.278)
     cast_part_human_swirl_case()
+    # from set probe15: the small grab moves half as many vertices as the Smooth over it (a
+    # smoothing carried only what moves 0.4 of its vertices: 0.147 against the frame ideal,
+    # sum 0.132)
+    smooth_wide_human_grab_case()
 elif which == "held3":
     # regr01.obj, a house of 275 pieces (32 once welded), not welded: every piece subdivided
     # on its own (its walls' large faces get vertices); the grab crushes thin walls, folding
@@ -1084,6 +1094,19 @@ elif which == "probe14":
           lambda o: pinch(o, at("-x"), 0.15, 0.6),
           lambda o: tiny_grab(o, at("+x"), (0, 0.03, 0.02), 0.15),
           lambda o: cast(o, 0.3)], "stack", details=[0, 1, 2])
+elif which == "probe15":
+    # sideways details nearly as wide as the Smooth over them (its reach bound: a smoothing
+    # carries what moves at most 1/2.5 of its vertices); scored by hand, not kept
+    case("smooth_plus_wide_pinch_wuson", "wuson",
+         [lambda o: pinch(o, at("+y"), 0.35, 0.6),
+          lambda o: smooth(o, at("+y"), 0.5, 1.0, 20)], "stack", details=[0])
+    case("smooth_plus_wide_pinch_suzanne_shipped", "suzanne_shipped",
+         [lambda o: pinch(o, at("-y"), 0.45, 0.6),
+          lambda o: smooth(o, at("-y"), 0.6, 1.0, 20)], "stack", details=[0])
+    smooth_wide_human_grab_case()
+    case("smooth_plus_wide_swirl_monkey", "monkey2",
+         [lambda o: local_twist(o, *LM["+z"], 0.35, math.radians(40)),
+          lambda o: smooth(o, at("+z"), 0.5, 1.0, 20)], "stack", details=[0])
 elif which == "house":
     house_grab_case()
     case("cast_plus_detail_house", "house",
