@@ -608,23 +608,17 @@ def smooth_suzanne_pinch_case():
          [lambda o: pinch(o, at("-y"), 0.25, 0.6),
           lambda o: smooth(o, at("-y"), 0.8, 1.0, 20)], "stack", details=[0])
 
-def smooth_human_grab_case():
+def smooth_human_grab_case(name, grab_radius, smooth_radius):
     """a small grab on the human figure's side under a Smooth of it"""
-    case("smooth_plus_tinygrab_human", "human",
-         [lambda o: tiny_grab(o, at("+x"), (0, 0.02, 0.02), 0.15),
-          lambda o: smooth(o, at("+x"), 0.5, 1.0, 20)], "stack", details=[0])
+    case(name, "human",
+         [lambda o: tiny_grab(o, at("+x"), (0, 0.02, 0.02), grab_radius),
+          lambda o: smooth(o, at("+x"), smooth_radius, 1.0, 20)], "stack", details=[0])
 
 def cast_part_human_swirl_case():
     """a swirl on the human figure's head under a Cast of the head"""
     case("cast_part_plus_swirl_human", "human",
          [lambda o: local_twist(o, *LM["+z"], 0.2, math.radians(60)),
           lambda o: cast_part(o, 0.8, at("+z"), 0.6)], "stack", details=[0])
-
-def smooth_wide_human_grab_case():
-    """a small grab on the human figure's side under a Smooth barely wider than it"""
-    case("smooth_plus_wide_tinygrab_human", "human",
-         [lambda o: tiny_grab(o, at("+x"), (0, 0.02, 0.02), 0.3),
-          lambda o: smooth(o, at("+x"), 0.4, 1.0, 20)], "stack", details=[0])
 
 def house_grab_case():
     """a detail on a roof of the house and a grab over it that crushes thin walls"""
@@ -719,7 +713,7 @@ elif which == "held4":
     smooth_suzanne_pinch_case()
     # from set probe13: a small grab on the human figure under a Smooth; read as the coarser
     # edit where the two meet (0.155 against the frame ideal, sum 0.155)
-    smooth_human_grab_case()
+    smooth_human_grab_case("smooth_plus_tinygrab_human", 0.15, 0.5)
     # from set probe9: a swirl on the figure's head under a Cast of the head, which folds 77
     # faces itself (the frame ideal 174); ending the merge's folds by smoothing moved the swirl
     # (0.310 against the frame ideal, sum 0.278)
@@ -727,7 +721,7 @@ elif which == "held4":
     # from set probe15: the small grab moves half as many vertices as the Smooth over it (a
     # smoothing carried only what moves 0.4 of its vertices: 0.147 against the frame ideal,
     # sum 0.132)
-    smooth_wide_human_grab_case()
+    smooth_human_grab_case("smooth_plus_wide_tinygrab_human", 0.3, 0.4)  # barely wider
 elif which == "held3":
     # regr01.obj, a house of 275 pieces (32 once welded), not welded: every piece subdivided
     # on its own (its walls' large faces get vertices); the grab crushes thin walls, folding
@@ -1045,7 +1039,7 @@ elif which == "probe13":
     case("smooth_plus_pinch_wuson", "wuson",
          [lambda o: pinch(o, at("+y"), 0.2, 0.6),
           lambda o: smooth(o, at("+y"), 0.6, 1.0, 20)], "stack", details=[0])
-    smooth_human_grab_case()
+    smooth_human_grab_case("smooth_plus_tinygrab_human", 0.15, 0.5)
     case("smooth_plus_swirl_duck", "duck",
          [lambda o: local_twist(o, *LM["+z"], 0.2, math.radians(50)),
           lambda o: smooth(o, at("+z"), 0.6, 1.0, 20)], "stack", details=[0])
@@ -1103,7 +1097,7 @@ elif which == "probe15":
     case("smooth_plus_wide_pinch_suzanne_shipped", "suzanne_shipped",
          [lambda o: pinch(o, at("-y"), 0.45, 0.6),
           lambda o: smooth(o, at("-y"), 0.6, 1.0, 20)], "stack", details=[0])
-    smooth_wide_human_grab_case()
+    smooth_human_grab_case("smooth_plus_wide_tinygrab_human", 0.3, 0.4)  # barely wider
     case("smooth_plus_wide_swirl_monkey", "monkey2",
          [lambda o: local_twist(o, *LM["+z"], 0.35, math.radians(40)),
           lambda o: smooth(o, at("+z"), 0.5, 1.0, 20)], "stack", details=[0])
