@@ -303,15 +303,15 @@ class Undo(unittest.TestCase):
             self.assertGreater(a.undo(pa, ca).size, 0)
             pending["a"] = 1
             wait_for(lambda: synced(hosts, pending, 2), "the undo on both peers")
+            alone = np.setdiff1d(mine, theirs)
+            far = alone[np.linalg.norm(base_p[alone] - top, axis=1) > 0.35]
+            self.assertGreater(len(far), 100)
             for p in (pa, pb):
                 lift = p[theirs] - base_p[theirs]
                 peak = int(np.argmax(np.linalg.norm(lift, axis=1)))
                 self.assertGreater(float(np.linalg.norm(lift[peak])), 0.8 * 0.06, "the bump shrank")
                 tilt = np.degrees(np.arccos(np.dot(lift[peak], top) / np.linalg.norm(lift[peak])))
                 self.assertLess(float(tilt), 8.0, "the bump kept the undone drag's slope")
-                alone = np.setdiff1d(mine, theirs)
-                far = alone[np.linalg.norm(base_p[alone] - top, axis=1) > 0.35]
-                self.assertGreater(len(far), 100)
                 np.testing.assert_allclose(p[far], base_p[far], rtol=0, atol=0.002)
 
 
