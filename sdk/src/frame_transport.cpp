@@ -65,6 +65,12 @@ bool is_identity(const Quat& q) {
   return q.w == 1.f && q.x == 0.f && q.y == 0.f && q.z == 0.f;
 }
 
+/// A vertex's unit area-weighted base normal (zero when it has no faces) and mean edge length.
+struct BaseFrame {
+  Vec3d normal;
+  double edge = 0;
+};
+
 /// Everything the per-vertex formula needs about one vertex.
 struct VertexState {
   std::array<Vec3d, kMaxUsers> d;
@@ -109,7 +115,7 @@ class Transport {
   bool may_carry(const VertexState& s) const;
   void load_turns(std::size_t at, VertexState& s) const;
   void load_displacements(std::size_t at, VertexState& s) const;
-  double ring_stretch(std::size_t at, std::size_t i, const Vec3d& n) const;
+  void ring_stretches(std::size_t at, const VertexState& s, const Vec3d& n, double* k) const;
   std::size_t sole_mover(std::size_t at) const;
   Vec3f lone_edit(std::size_t at, std::size_t i) const;
   Vec3f transported(std::size_t at, const VertexState& s) const;
@@ -117,10 +123,9 @@ class Transport {
   void share_rotations(std::uint32_t groups);
   Quat rotation(std::size_t at, std::size_t i) const;
   Vec3d face_cross(std::uint32_t f) const;
+  BaseFrame base_frame(std::uint32_t v) const;
   Vec3d base_normal(std::uint32_t v) const;
-  double edge_length(std::uint32_t v) const;
   Quat carrier(std::size_t at, std::size_t i, double level) const;
-  Vec3d normal(std::size_t at) const;
   Vec3d edited_position(std::size_t i, std::uint32_t v) const;
   double faces_agree(std::uint32_t v, std::size_t i) const;
   double agreement(std::size_t at, std::size_t i) const;
@@ -235,16 +240,22 @@ Vec3d Transport::face_cross(std::uint32_t f) const {
   return cross(sub(widen(base_[t[1]]), p0), sub(widen(base_[t[2]]), p0));
 }
 
-/// The mean edge length around v, from the area of its base faces (equilateral triangles of
-/// that area); 0 when it has none.
-double Transport::edge_length(std::uint32_t v) const {
+/// v's base normal, and its mean edge length from the area of its base faces (equilateral
+/// triangles of that area; 0 when it has none): one pass over its faces for both.
+BaseFrame Transport::base_frame(std::uint32_t v) const {
+  Vec3d sum{};
   double area = 0;
   std::size_t faces = 0;
   for (std::uint32_t f : topology_.vertex_faces.row(v)) {
-    area += length(face_cross(f)) / 2;
+    const Vec3d c = face_cross(f);
+    sum = add(sum, c);
+    area += length(c) / 2;
     ++faces;
   }
-  return faces ? std::sqrt(4 / std::sqrt(3.0) * area / static_cast<double>(faces)) : 0.0;
+  if (faces == 0) return {};
+  const double len = length(sum);
+  return {len > 0 ? scale(sum, 1.0 / len) : Vec3d{},
+          std::sqrt(4 / std::sqrt(3.0) * area / static_cast<double>(faces))};
 }
 
 /// The carrying level a displacement of `size` reads where edges are `edge` long: log2 of
@@ -254,11 +265,10 @@ double carrying_level(double size, double edge) {
   return span > 1 ? std::min(std::log2(span), static_cast<double>(kCarryLevels - 1)) : 0.0;
 }
 
-/// The listed vertex's edge length, and the levels its displacements read (the two around
-/// each one's level), so that only those are averaged there.
+/// The levels the listed vertex's displacements read (the two around each one's level), so
+/// that only those are averaged there; its edge length is in scratch_.edge.
 void Transport::plan_levels(std::size_t at, const VertexState& s) {
   const std::uint32_t v = vertices_[at];
-  scratch_.edge[at] = edge_length(v);
   std::uint8_t bits = 0;
   for (std::size_t j = 0; j < n_; ++j) {
     if (!s.moves[j]) continue;
@@ -291,12 +301,8 @@ Quat Transport::carrier(std::size_t at, std::size_t i, double level) const {
           static_cast<float>(z / len)};
 }
 
-/// The unit area-weighted normal of v's base faces (zero when it has none).
 Vec3d Transport::base_normal(std::uint32_t v) const {
-  Vec3d sum{};
-  for (std::uint32_t f : topology_.vertex_faces.row(v)) sum = add(sum, face_cross(f));
-  const double len = length(sum);
-  return len > 0 ? scale(sum, 1.0 / len) : Vec3d{};
+  return base_frame(v).normal;
 }
 
 /// Coincident vertices (split seams) share one normal, the normalised sum of theirs, as
@@ -314,10 +320,6 @@ void Transport::share_normals() {
   }
 }
 
-Vec3d Transport::normal(std::size_t at) const {
-  const std::uint32_t group = scratch_.seam_of[at];
-  return group != kNoSeam ? scratch_.seam_normal[group] : base_normal(vertices_[at]);
-}
 
 Vec3d Transport::edited_position(std::size_t i, std::uint32_t v) const {
   const TransportInput& u = users_[i];
@@ -326,18 +328,19 @@ Vec3d Transport::edited_position(std::size_t i, std::uint32_t v) const {
   return widen(Vec3f{e[0], e[1], e[2]});
 }
 
-/// The turn taking unit vector a to unit vector b, as a unit quaternion (for b = -a, a half
-/// turn about an axis perpendicular to a).
+/// The turn taking the direction of a to that of b (both non-zero), as a unit quaternion: (|a|
+/// |b| + a.b, a x b) normalised, which needs neither vector normalised; for opposite
+/// directions, a half turn about an axis perpendicular to a.
 Vec4d turn_between(const Vec3d& a, const Vec3d& b) {
-  const double c = dot(a, b);
+  const double ab = std::sqrt(norm2(a) * norm2(b));
   Vec3d axis = cross(a, b);
-  double w = 1 + c;
-  if (!(w > 1e-12)) {  // opposite: any perpendicular axis
-    axis = std::fabs(a.x) < 0.9 ? cross(a, Vec3d{1, 0, 0}) : cross(a, Vec3d{0, 1, 0});
+  double w = ab + dot(a, b);
+  if (!(w > 1e-12 * ab)) {  // opposite: any perpendicular axis
+    axis = std::fabs(a.x) < 0.9 * length(a) ? cross(a, Vec3d{1, 0, 0}) : cross(a, Vec3d{0, 1, 0});
     w = 0;
   }
-  const double len = std::sqrt(w * w + norm2(axis));
-  return {w / len, axis.x / len, axis.y / len, axis.z / len};
+  const double inverse = 1 / std::sqrt(w * w + norm2(axis));
+  return {w * inverse, axis.x * inverse, axis.y * inverse, axis.z * inverse};
 }
 
 /// How well the faces around v agree on how diff i turns the surface: 1 where they turn
@@ -353,9 +356,8 @@ double Transport::faces_agree(std::uint32_t v, std::size_t i) const {
     const Vec3d a = face_cross(f);
     const Vec3d p0 = edited_position(i, t[0]);
     const Vec3d b = cross(sub(edited_position(i, t[1]), p0), sub(edited_position(i, t[2]), p0));
-    const double la = length(a), lb = length(b);
-    if (!(la > 0) || !(lb > 0)) continue;  // a degenerate face says nothing
-    Vec4d q = turn_between(scale(a, 1 / la), scale(b, 1 / lb));
+    if (!(norm2(a) > 0) || !(norm2(b) > 0)) continue;  // a degenerate face says nothing
+    Vec4d q = turn_between(a, b);
     if (faces == 0) first = q;
     if (q.w * first.w + q.x * first.x + q.y * first.y + q.z * first.z < 0)
       q = {-q.w, -q.x, -q.y, -q.z};
@@ -440,14 +442,21 @@ void Transport::chunk_energy(std::size_t begin, std::size_t end, double* energy)
     scratch_.carried_here[at] = may_carry(s);
     if (!scratch_.carried_here[at]) continue;  // its energy terms are zero, its levels unread
     load_displacements(at, s);
+    const BaseFrame frame = base_frame(vertices_[at]);
+    scratch_.edge[at] = frame.edge;
     plan_levels(at, s);
-    const Vec3d n = scratch_.normal[at] = normal(at);
+    // Coincident vertices (split seams) share one normal, as they share one rotation.
+    const std::uint32_t group = scratch_.seam_of[at];
+    const Vec3d n = scratch_.normal[at] =
+        group != kNoSeam ? scratch_.seam_normal[group] : frame.normal;
+    std::array<double, kMaxUsers> k;
+    ring_stretches(at, s, n, k.data());
     for (std::size_t i = 0; i < n_; ++i) {
       if (!s.turns[i] && !s.moves[i]) continue;
-      const double k = ring_stretch(at, i, n);
       for (std::size_t j = 0; j < n_; ++j)
         if (j != i && s.moves[j])
-          energy[i * n_ + j] += norm2(rotation_change(s.rotation[i], s.d[j])) + k * norm2(s.d[j]);
+          energy[i * n_ + j] +=
+              norm2(rotation_change(s.rotation[i], s.d[j])) + k[i] * norm2(s.d[j]);
     }
   }
 }
@@ -461,7 +470,8 @@ double sideways(const Vec3d& d, const Vec3d& n, double edge) {
   return (all - along * along) / all;
 }
 
-/// How much diff i stretches the one ring of the listed vertex `at` (base normal n): twice the
+/// How much each diff stretches the one ring of the listed vertex `at` (base normal n), into
+/// k[i] for the diffs that move or turn there (one pass over the ring for all): twice the
 /// mean squared relative change of its edges' lengths (a stretch by s along one direction gives
 /// about (s - 1)^2, its share of |F - I|^2 for F the deformation gradient). A detail that moves
 /// the surface sideways (a pinch, a small grab) hardly turns it but squeezes and shears it; by
@@ -473,23 +483,36 @@ double sideways(const Vec3d& d, const Vec3d& n, double edge) {
 /// it). A lift's fineness is in its slope, which its turns measure. A pinch, which moves the
 /// vertex sideways, keeps its even squeeze. A rigid motion changes no length, so whatever its
 /// direction it adds nothing.
-double Transport::ring_stretch(std::size_t at, std::size_t i, const Vec3d& n) const {
+void Transport::ring_stretches(std::size_t at, const VertexState& s, const Vec3d& n,
+                               double* k) const {
   const std::uint32_t v = vertices_[at];
-  const Vec3d b = widen(base_[v]), e = edited_position(i, v);
-  double sum = 0, squares = 0;
+  const Vec3d b = widen(base_[v]);
+  std::array<Vec3d, kMaxUsers> e;
+  std::array<double, kMaxUsers> sum, squares;
+  for (std::size_t i = 0; i < n_; ++i) {
+    e[i] = add(b, s.d[i]);
+    sum[i] = squares[i] = 0;
+  }
   std::size_t edges = 0;
   for (const std::uint32_t u : topology_.vertex_vertices.row(v)) {
-    const double before = length(sub(widen(base_[u]), b));
+    const double before = norm2(sub(widen(base_[u]), b));
     if (!(before > 0)) continue;  // a collapsed edge says nothing
-    const double change = length(sub(edited_position(i, u), e)) / before - 1;
-    sum += change;
-    squares += change * change;
+    const double inverse = 1 / before;
+    for (std::size_t i = 0; i < n_; ++i) {
+      if (!s.turns[i] && !s.moves[i]) continue;
+      const double change = std::sqrt(norm2(sub(edited_position(i, u), e[i])) * inverse) - 1;
+      sum[i] += change;
+      squares[i] += change * change;
+    }
     ++edges;
   }
-  if (edges == 0) return 0.0;
-  const double mean = sum / static_cast<double>(edges);
-  const double uneven = std::max(0.0, squares / static_cast<double>(edges) - mean * mean);
-  return 2 * (uneven + sideways(sub(e, b), n, scratch_.edge[at]) * mean * mean);
+  for (std::size_t i = 0; i < n_; ++i) {
+    k[i] = 0;
+    if (edges == 0 || (!s.turns[i] && !s.moves[i])) continue;
+    const double mean = sum[i] / static_cast<double>(edges);
+    const double uneven = std::max(0.0, squares[i] / static_cast<double>(edges) - mean * mean);
+    k[i] = 2 * (uneven + sideways(s.d[i], n, scratch_.edge[at]) * mean * mean);
+  }
 }
 
 /// Diff i's umbrella Laplacian (the neighbours' mean less the vertex) at v, on the base
