@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "fold_repair.h"
+#include "fold_test.h"
 
 namespace csculpt::detail {
 namespace {
@@ -44,11 +45,6 @@ constexpr std::size_t kMaxUsers = 64;
 /// the result is always nearer the frame's reading than addition; below the 1.5 the
 /// stacked ideal's rule allows, for the error of the fitted Jacobian.
 constexpr double kStackReach = 1.2;
-
-/// A quaternion in double, for the faces' turns summed around a vertex.
-struct Vec4d {
-  double w = 0, x = 0, y = 0, z = 0;
-};
 
 bool has(const std::uint64_t* bits, std::uint32_t v) {
   return (bits[v >> 6] >> (v & 63) & 1) != 0;
@@ -92,9 +88,10 @@ class Transport {
         n_(users.size()),
         same_once_(same_once) {}
 
-  /// Fits the regional Jacobians of the diffs with carries[i] around the carried vertices.
-  void fit_jacobians(const JacobianSamples& samples, std::span<const bool> carries,
-                     WorkerPool& pool);
+  /// What the regional Jacobians of the diffs with carries[i] need before they are fitted
+  /// around the carried vertices (serial work, run beside the carriers' averaging).
+  void prepare_jacobians(const JacobianSamples& samples, std::span<const bool> carries);
+  void fit_jacobians(std::span<const bool> carries, WorkerPool& pool);
 
   void find_seams();
   void share_normals();
@@ -106,6 +103,7 @@ class Transport {
   std::size_t moved_count(std::size_t i) const;
   Vec3d umbrella(std::size_t i, std::uint32_t v, bool edited) const;
   void carry_inside_smoothings();
+  void cache_face_turns(std::span<const bool> carries, WorkerPool& pool, std::size_t grain);
   /// The merged position of the listed vertex `at`; `s` is scratch (its arrays are sized for
   /// the most users, so it is made once per chunk, not per vertex).
   Vec3f merged(std::size_t at, VertexState& s) const;
@@ -113,6 +111,7 @@ class Transport {
  private:
   void plan_levels(std::size_t at, const VertexState& s);
   bool may_carry(const VertexState& s) const;
+  bool may_carry_by_bits(std::size_t at) const;
   void load_turns(std::size_t at, VertexState& s) const;
   void load_displacements(std::size_t at, VertexState& s) const;
   void ring_stretches(std::size_t at, const VertexState& s, const Vec3d& n, double* k) const;
@@ -128,6 +127,11 @@ class Transport {
   Quat carrier(std::size_t at, std::size_t i, double level) const;
   Vec3d edited_position(std::size_t i, std::uint32_t v) const;
   double faces_agree(std::uint32_t v, std::size_t i) const;
+  Vec4d turn_of_face(std::uint32_t f, std::size_t i) const;
+  Vec4d face_turn(std::uint32_t f, std::size_t i) const;
+  bool carried_vertex(std::uint32_t v) const;
+  template <class Visit>
+  void for_owned_faces(std::size_t begin, std::size_t end, Visit&& visit) const;
   double agreement(std::size_t at, std::size_t i) const;
 
   const Topology& topology_;
@@ -139,6 +143,7 @@ class Transport {
   bool same_once_;         ///< false: s = 0 (SameChange::add)
   bool hedged_ = false;    ///< carried details are hedged toward their stacked reading
   bool regional_ = false;  ///< the regional Jacobians are fitted
+  std::array<bool, kMaxUsers> turns_cached_{};  ///< per diff: its face turns are in face_turns
   void fit_grabs(std::span<const bool> carries);
   double same(const VertexState& s, std::size_t i, std::size_t j) const;
 };
@@ -352,12 +357,8 @@ double Transport::faces_agree(std::uint32_t v, std::size_t i) const {
   Vec4d sum{}, first{};
   std::size_t faces = 0;
   for (std::uint32_t f : topology_.vertex_faces.row(v)) {
-    const Triangle& t = topology_.triangles[f];
-    const Vec3d a = face_cross(f);
-    const Vec3d p0 = edited_position(i, t[0]);
-    const Vec3d b = cross(sub(edited_position(i, t[1]), p0), sub(edited_position(i, t[2]), p0));
-    if (!(norm2(a) > 0) || !(norm2(b) > 0)) continue;  // a degenerate face says nothing
-    Vec4d q = turn_between(a, b);
+    Vec4d q = face_turn(f, i);
+    if (q.w == 0 && q.x == 0 && q.y == 0 && q.z == 0) continue;  // a degenerate face
     if (faces == 0) first = q;
     if (q.w * first.w + q.x * first.x + q.y * first.y + q.z * first.z < 0)
       q = {-q.w, -q.x, -q.y, -q.z};
@@ -371,6 +372,72 @@ double Transport::faces_agree(std::uint32_t v, std::size_t i) const {
   const double lo = std::cos(kFoldSpread / 2), hi = std::cos(kSmoothSpread / 2);
   const double x = std::clamp((mean - lo) / (hi - lo), 0.0, 1.0);
   return x * x * (3 - 2 * x);
+}
+
+/// How diff i turns base face f, as a unit quaternion; zero for a face degenerate before or
+/// after (it says nothing of the turn).
+Vec4d Transport::turn_of_face(std::uint32_t f, std::size_t i) const {
+  const Triangle& t = topology_.triangles[f];
+  const Vec3d a = face_cross(f);
+  const Vec3d p0 = edited_position(i, t[0]);
+  const Vec3d b = cross(sub(edited_position(i, t[1]), p0), sub(edited_position(i, t[2]), p0));
+  if (!(norm2(a) > 0) || !(norm2(b) > 0)) return {};
+  return turn_between(a, b);
+}
+
+/// turn_of_face(), from the rows cache_face_turns() filled where it did.
+Vec4d Transport::face_turn(std::uint32_t f, std::size_t i) const {
+  const std::uint32_t row = f < scratch_.face_row.size() ? scratch_.face_row[f] : kNoRow;
+  if (row != kNoRow && turns_cached_[i]) return scratch_.face_turns[row * n_ + i];
+  return turn_of_face(f, i);
+}
+
+/// Whether v is carried (its levels planned: every carried vertex reads some level).
+bool Transport::carried_vertex(std::uint32_t v) const {
+  return scratch_.reads_level[v] != 0;
+}
+
+/// The faces around the carried vertices listed from `begin` to `end`, each from its lowest
+/// carried vertex only; `visit(f)` for each.
+template <class Visit>
+void Transport::for_owned_faces(std::size_t begin, std::size_t end, Visit&& visit) const {
+  auto carried = [this](std::uint32_t u) { return carried_vertex(u); };
+  for (std::size_t at = begin; at < end; ++at) {
+    if (!scratch_.carried_here[at]) continue;
+    const std::uint32_t v = vertices_[at];
+    for (std::uint32_t f : topology_.vertex_faces.row(v))
+      if (lowest_listed(topology_.triangles[f], v, carried)) visit(f);
+  }
+}
+
+/// Every carrier's turn of each face around the carried vertices, once per face: the
+/// agreement of each of its three vertices reads it. Rows are numbered in chunk order.
+void Transport::cache_face_turns(std::span<const bool> carries, WorkerPool& pool,
+                                 std::size_t grain) {
+  std::copy(carries.begin(), carries.end(), turns_cached_.begin());
+  const std::size_t chunks = (vertices_.size() + grain - 1) / grain;
+  auto& first_row = scratch_.chunk_first_row;
+  first_row.assign(chunks + 1, 0);
+  pool.for_chunks(vertices_.size(), grain, [&](std::size_t begin, std::size_t end) {
+    std::uint32_t rows = 0;
+    for_owned_faces(begin, end, [&](std::uint32_t) { ++rows; });
+    first_row[begin / grain + 1] = rows;
+  });
+  for (std::size_t c = 0; c < chunks; ++c) first_row[c + 1] += first_row[c];
+  if (scratch_.face_row.size() < topology_.triangles.size())
+    scratch_.face_row.resize(topology_.triangles.size(), kNoRow);
+  scratch_.row_face.resize(first_row[chunks]);
+  scratch_.face_turns.resize(first_row[chunks] * n_);
+  pool.for_chunks(vertices_.size(), grain, [&](std::size_t begin, std::size_t end) {
+    std::uint32_t row = first_row[begin / grain];
+    for_owned_faces(begin, end, [&](std::uint32_t f) {
+      scratch_.face_row[f] = row;
+      scratch_.row_face[row] = f;
+      for (std::size_t i = 0; i < n_; ++i)
+        if (turns_cached_[i]) scratch_.face_turns[row * n_ + i] = turn_of_face(f, i);
+      ++row;
+    });
+  });
 }
 
 /// Coincident vertices (split seams) take the least agreement of their members, per diff, so
@@ -420,6 +487,13 @@ void Transport::load_turns(std::size_t at, VertexState& s) const {
   }
 }
 
+/// Whether some diff turns the surface under another diff's displacement, from how many
+/// diffs move the vertex, how many turn it and how many do both.
+bool carries_between(std::size_t movers, std::size_t turners, std::size_t both) {
+  // some i != j with turns[i] and moves[j]: unless the only turner is the only mover
+  return turners > 0 && movers > 0 && !(turners == 1 && movers == 1 && both == 1);
+}
+
 /// Whether some diff turns the surface at the vertex under another diff's displacement:
 /// elsewhere nothing is carried (every T_j is the identity), so the vertex needs no energy,
 /// no carrying level and no frame.
@@ -430,14 +504,32 @@ bool Transport::may_carry(const VertexState& s) const {
     turners += s.turns[i];
     both += s.moves[i] && s.turns[i];
   }
-  // some i != j with turns[i] and moves[j]: unless the only turner is the only mover
-  return turners > 0 && movers > 0 && !(turners == 1 && movers == 1 && both == 1);
+  return carries_between(movers, turners, both);
+}
+
+/// may_carry() from the diffs' bits alone, before their rotations are read: a diff with no
+/// rotation at the vertex does not turn it, one with a rotation may still not, so a vertex
+/// this rules out may_carry() rules out too (most of them: one diff edits them alone). A
+/// split seam's rotation is its group's, not its own: it is left to may_carry().
+bool Transport::may_carry_by_bits(std::size_t at) const {
+  if (scratch_.seam_of[at] != kNoSeam) return true;
+  const std::uint32_t v = vertices_[at];
+  std::size_t movers = 0, turners = 0, both = 0;
+  for (std::size_t i = 0; i < n_; ++i) {
+    const bool moves = has(users_[i].changed, v), turns = has(users_[i].rotated, v);
+    movers += moves;
+    turners += turns;
+    both += moves && turns;
+  }
+  return carries_between(movers, turners, both);
 }
 
 void Transport::chunk_energy(std::size_t begin, std::size_t end, double* energy) {
   std::fill(energy, energy + n_ * n_, 0.0);
   VertexState s;
   for (std::size_t at = begin; at < end; ++at) {
+    scratch_.carried_here[at] = 0;
+    if (!may_carry_by_bits(at)) continue;
     load_turns(at, s);
     scratch_.carried_here[at] = may_carry(s);
     if (!scratch_.carried_here[at]) continue;  // its energy terms are zero, its levels unread
@@ -717,10 +809,9 @@ Vec3f Transport::transported(std::size_t at, const VertexState& s) const {
   return narrow(add(widen(base_[vertices_[at]]), sum));
 }
 
-/// Fits the Jacobians of the carrying diffs at the samples near the vertices they may carry
-/// at, from each diff's displacement and the base normals there.
-void Transport::fit_jacobians(const JacobianSamples& samples, std::span<const bool> carries,
-                              WorkerPool& pool) {
+/// Recognises the carrying diffs that are grabs and lists the samples near the vertices the
+/// others may carry at.
+void Transport::prepare_jacobians(const JacobianSamples& samples, std::span<const bool> carries) {
   if (!(samples.radius > 0)) return;  // frame-transport: the frames alone carry
   hedged_ = true;
   fit_grabs(carries);
@@ -730,6 +821,13 @@ void Transport::fit_jacobians(const JacobianSamples& samples, std::span<const bo
   if (!regional_) return;
   for (std::size_t at = 0; at < vertices_.size(); ++at)
     if (scratch_.carried_here[at]) jacobians.need(widen(base_[vertices_[at]]));
+}
+
+/// Fits the Jacobians of the carrying diffs that are not grabs at the samples listed, from
+/// each diff's displacement and the base normals there.
+void Transport::fit_jacobians(std::span<const bool> carries, WorkerPool& pool) {
+  if (!regional_) return;
+  RegionalJacobians& jacobians = scratch_.jacobians;
   jacobians.plan([&](std::uint32_t v) { return base_normal(v); }, pool);
   for (std::size_t i = 0; i < n_; ++i) {
     if (!carries[i] || scratch_.grabs[i].valid()) continue;
@@ -760,8 +858,7 @@ void transport_positions(
     const Topology& topology, std::span<const Vec3f> base, std::span<const std::uint32_t> vertices,
     std::span<const TransportInput> users, bool same_once, const JacobianSamples& samples,
     TransportScratch& scratch, WorkerPool& pool, std::size_t grain,
-    const std::function<void(std::span<const bool>, std::span<const std::uint8_t>)>& carriers,
-    std::span<Vec3f> moved) {
+    const CarryingFields& carriers, std::span<Vec3f> moved) {
   Transport t(topology, base, vertices, users, same_once, scratch);
   t.find_seams();
   t.share_normals();
@@ -783,13 +880,16 @@ void transport_positions(
   std::array<bool, kMaxUsers> carries{};
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t j = 0; j < n; ++j) carries[i] = carries[i] || scratch.weight[i * n + j] > 0;
-  carriers(std::span<const bool>(carries.data(), n), scratch.reads_level);
-  t.fit_jacobians(samples, std::span<const bool>(carries.data(), n), pool);
+  const std::span<const bool> carrying(carries.data(), n);
+  carriers(carrying, scratch.reads_level, [&] { t.prepare_jacobians(samples, carrying); });
+  t.fit_jacobians(carrying, pool);
+  t.cache_face_turns(carrying, pool, grain);
   pool.for_chunks(vertices.size(), grain, [&](std::size_t begin, std::size_t end) {
     VertexState s;
     for (std::size_t at = begin; at < end; ++at) moved[at] = t.merged(at, s);
   });
   for (const std::uint32_t v : vertices) scratch.reads_level[v] = 0;
+  for (const std::uint32_t f : scratch.row_face) scratch.face_row[f] = kNoRow;
 }
 
 }  // namespace csculpt::detail

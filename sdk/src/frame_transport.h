@@ -82,6 +82,14 @@ namespace csculpt::detail {
 /// 16 edges around it). A displacement longer than that still reads level 4.
 constexpr std::size_t kCarryLevels = 5;
 
+/// A quaternion in double: a face's turn, and the faces' turns summed around a vertex.
+struct Vec4d {
+  double w = 0, x = 0, y = 0, z = 0;
+};
+
+/// No row of TransportScratch::face_turns.
+constexpr std::uint32_t kNoRow = 0xffffffffu;
+
 /// One diff as the transport reads it, in the merge's canonical order.
 struct TransportInput {
   /// Per vertex: its rotation under this diff, valid where `rotated` has the vertex's bit.
@@ -108,6 +116,11 @@ struct TransportScratch {
   std::vector<double> seam_agreement;  ///< per seam group and diff: the least agreement
   std::vector<double> edge;            ///< per listed vertex: its mean edge length
   std::vector<Vec3d> normal;           ///< per listed vertex where carried_here: its base normal
+  /// Per face: its row of face_turns, or kNoRow (all kNoRow between merges).
+  std::vector<std::uint32_t> face_row;
+  std::vector<std::uint32_t> row_face;  ///< per row: its face
+  std::vector<Vec4d> face_turns;        ///< per row and carrier: how the carrier turns the face
+  std::vector<std::uint32_t> chunk_first_row;  ///< per chunk of listed vertices: its first row
   /// Per listed vertex: 1 where some diff turns the surface under another's displacement.
   std::vector<std::uint8_t> carried_here;
   /// Per listed vertex: the diff whose edited position the merge gave it exactly, or
@@ -127,12 +140,20 @@ struct TransportScratch {
   std::vector<std::uint32_t> moved_by;  ///< the vertices one diff moves
 };
 
+/// Sets the carrying levels of the diffs with carries[i] (see transport_positions), and runs
+/// `beside` once meanwhile, as one more task of the parallel region that averages them: the
+/// transport's serial work that needs no carrying level overlaps the averaging (with one
+/// carrier, the other threads would wait for it).
+using CarryingFields = std::function<void(std::span<const bool> carries,
+                                          std::span<const std::uint8_t> reads_level,
+                                          const std::function<void()>& beside)>;
+
 /// Merged positions of the vertices in `vertices` (increasing: the union of the changed
 /// ones) into `moved` (one per vertex), using `pool` in chunks of `grain`. `same_once`: the
 /// sameness s as above; false takes s = 0 (SameChange::add: every displacement adds).
-/// `carriers(carries, reads_level)`, once the weights are known and before any position is
-/// merged, sets `smoothed` of each input i with carries[i] (it carries another diff
-/// somewhere); level l is read only at the vertices v with bit l of reads_level[v].
+/// `carriers(carries, reads_level, beside)`, once the weights are known and before any
+/// position is merged, sets `smoothed` of each input i with carries[i] (it carries another
+/// diff somewhere); level l is read only at the vertices v with bit l of reads_level[v].
 /// `samples` with a radius: each carried displacement is kept within kStackReach times
 /// addition's distance of how the carrier's regional Jacobian would move it (the hedge
 /// above); without one, the frames alone carry.
@@ -140,7 +161,6 @@ void transport_positions(
     const Topology& topology, std::span<const Vec3f> base, std::span<const std::uint32_t> vertices,
     std::span<const TransportInput> users, bool same_once, const JacobianSamples& samples,
     TransportScratch& scratch, WorkerPool& pool, std::size_t grain,
-    const std::function<void(std::span<const bool>, std::span<const std::uint8_t>)>& carriers,
-    std::span<Vec3f> moved);
+    const CarryingFields& carriers, std::span<Vec3f> moved);
 
 }  // namespace csculpt::detail

@@ -896,7 +896,8 @@ struct Merger::Pass {
   double diff_isometries(std::size_t u);
   void blend_isometries(std::size_t kept_chunks);
   void transport_positions();
-  void carrying_fields(std::span<const bool> carries, std::span<const std::uint8_t> reads_level);
+  void carrying_fields(std::span<const bool> carries, std::span<const std::uint8_t> reads_level,
+                       const std::function<void()>& beside);
   detail::JacobianSamples jacobian_samples() const;
   void carrying_rotations(std::size_t u, std::size_t top, std::span<const std::uint8_t> reads_level,
                           CarryingScratch& scratch);
@@ -1111,10 +1112,11 @@ void Merger::Pass::transport_positions() {
     ws.transport_inputs[u] = {level0.values.data(), level0.bits.data(), ws.lookups[u].slot.data(),
                               ws.lookups[u].changed.words.data(), positions_of(u).values.data()};
   }
-  const std::function<void(std::span<const bool>, std::span<const std::uint8_t>)> carriers =
-      [&](std::span<const bool> carries, std::span<const std::uint8_t> reads_level) {
-        carrying_fields(carries, reads_level);
-      };
+  const detail::CarryingFields carriers = [&](std::span<const bool> carries,
+                                               std::span<const std::uint8_t> reads_level,
+                                               const std::function<void()>& beside) {
+    carrying_fields(carries, reads_level, beside);
+  };
   detail::transport_positions(
       hierarchy.topology(), base.positions, changed_union, ws.transport_inputs, t.same_once,
       t.hedge ? jacobian_samples() : detail::JacobianSamples{}, ws.transport, ws.pool, kBlendGrain,
@@ -1144,19 +1146,26 @@ detail::JacobianSamples Merger::Pass::jacobian_samples() const {
 }
 
 /// The carrying levels of each diff that carries another: one task per such diff and level,
-/// each writing only its own field and scratch.
+/// each writing only its own field and scratch; `beside` runs as one more task beside the
+/// averages (detail::CarryingFields).
 void Merger::Pass::carrying_fields(std::span<const bool> carries,
-                                   std::span<const std::uint8_t> reads_level) {
+                                   std::span<const std::uint8_t> reads_level,
+                                   const std::function<void()>& beside) {
   const std::size_t levels = level_count - 1;
-  if (levels == 0) return;  // a hierarchy of one level: the vertices' own rotations
+  if (levels == 0) {  // a hierarchy of one level: the vertices' own rotations
+    beside();
+    return;
+  }
   if (ws.carrying.size() < std::size_t{users} * detail::kCarryLevels)
     ws.carrying.resize(std::size_t{users} * detail::kCarryLevels);
   std::array<std::uint32_t, max_merge_diffs> carrier{};
   std::size_t count = 0;
   for (std::uint32_t u = 0; u < users; ++u)
     if (carries[u]) carrier[count++] = u;
-  ws.pool.run(
-      count, [&](std::size_t k) { decompose<DqOps>(links, level_count, ws.dq_users[carrier[k]]); });
+  ws.pool.run(count + 1, [&](std::size_t k) {
+    if (k == count) return beside();
+    decompose<DqOps>(links, level_count, ws.dq_users[carrier[k]]);
+  });
   const std::size_t tasks = count * levels;
   if (ws.carrying_scratch.size() < tasks) ws.carrying_scratch.resize(tasks);
   ws.pool.run(tasks, [&](std::size_t task) {
