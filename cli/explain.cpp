@@ -203,12 +203,16 @@ std::vector<LevelError> decompose(const Hierarchy& h, std::vector<Vec3d> values)
 
 // ---- one ideal ----------------------------------------------------------------------------
 
+/// An ideal is the base's vertices moved: stored with the base's triangles or with none (a
+/// point set, as tests/eval/cases stores them to keep the cases small).
 Mesh read_ideal(const std::string& path, const Mesh& base) {
-  Mesh ideal = read_mesh(path);
-  if (ideal.vertex_count() != base.vertex_count() || ideal.triangles != base.triangles)
-    throw InvalidInput(path + ": an ideal must have the base's vertices (" +
-                       std::to_string(base.vertex_count()) + ") and triangles; it has " +
-                       std::to_string(ideal.vertex_count()) + " vertices");
+  Mesh ideal = read_mesh(path, Faces::optional);
+  if (ideal.vertex_count() != base.vertex_count())
+    throw InvalidInput(path + ": an ideal must have the base's " +
+                       std::to_string(base.vertex_count()) + " vertices; it has " +
+                       std::to_string(ideal.vertex_count()));
+  if (!ideal.triangles.empty() && ideal.triangles != base.triangles)
+    throw InvalidInput(path + ": an ideal's triangles, when it has any, must be the base's");
   return ideal;
 }
 

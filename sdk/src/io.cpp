@@ -166,25 +166,34 @@ void write_atomically(const std::string& path, std::string_view data) {
   }
 }
 
-Mesh read_format(const std::string& path) {
+Mesh read_format(const std::string& path, Faces faces) {
   const std::string bytes = read_file(path);
   std::string format = extension_of(path);
   if (!is_known_extension(format)) {
     if (bytes.empty()) throw InvalidInput(cat(path, ": file is empty"));
     format = sniff(bytes);
   }
-  if (format == "ply") return parse_ply(bytes, path);
-  if (format == "obj") return parse_obj(bytes, path);
-  if (format == "off") return parse_off(bytes, path);
-  if (format == "stl") return parse_stl(bytes, path);
+  if (format == "ply") return parse_ply(bytes, path, faces);
+  if (format == "obj") return parse_obj(bytes, path, faces);
+  if (format == "off") return parse_off(bytes, path, faces);
+  if (format == "stl") return parse_stl(bytes, path, faces);
   throw InvalidInput(cat(path, ": unrecognised file format (supported: .ply .obj .off .stl)"));
 }
 
 }  // namespace
 
-Mesh read_mesh(const std::string& path) {
+namespace io_detail {
+
+void check_parsed(const Mesh& mesh, std::string_view what, Faces faces) {
+  if (!(faces == Faces::optional && mesh.triangles.empty())) check_unreferenced(mesh, what);
+  validate(mesh, what, faces);
+}
+
+}  // namespace io_detail
+
+Mesh read_mesh(const std::string& path, Faces faces) {
   try {
-    return read_format(path);
+    return read_format(path, faces);
   } catch (const OutOfMemory&) {
     throw;
   } catch (const std::bad_alloc&) {

@@ -167,6 +167,10 @@ constexpr std::size_t kMaxUnreferencedVertices = 1'000'000;
 /// vertices, and more than half of them, are used by no triangle.
 void check_unreferenced(const Mesh& mesh, std::string_view what);
 
+/// What every parser checks of the mesh it read: validate(), and, when it has faces, that
+/// they use enough of its vertices (check_unreferenced). A point set uses none.
+void check_parsed(const Mesh& mesh, std::string_view what, Faces faces);
+
 /// Serialises a validated mesh as binary little-endian PLY / as OBJ; `what` names the
 /// destination in error messages.
 std::string encode_ply(const Mesh& mesh, std::string_view what);

@@ -72,7 +72,7 @@ void append_index(std::string& out, std::uint32_t zero_based) {
 
 }  // namespace
 
-Mesh parse_obj(std::string_view bytes, std::string_view what) {
+Mesh parse_obj(std::string_view bytes, std::string_view what, Faces faces) {
   if (bytes.empty()) throw InvalidInput(cat(what, ": file is empty"));
   if (bytes.starts_with("\xFE\xFF") || bytes.starts_with("\xFF\xFE")) {
     throw InvalidInput(cat(what, ": UTF-16 encoded OBJ is not supported (save it as UTF-8)"));
@@ -157,8 +157,7 @@ Mesh parse_obj(std::string_view bytes, std::string_view what) {
     }
   });
   if (!colours.empty()) mesh.channels.push_back({default_channel("albedo", 3), std::move(colours)});
-  io_detail::check_unreferenced(mesh, what);
-  validate(mesh, what);
+  io_detail::check_parsed(mesh, what, faces);
   return mesh;
 }
 

@@ -43,7 +43,7 @@ class Lines {
 
 }  // namespace
 
-Mesh parse_off(std::string_view bytes, std::string_view what) {
+Mesh parse_off(std::string_view bytes, std::string_view what, Faces faces) {
   if (bytes.empty()) throw InvalidInput(cat(what, ": file is empty"));
   if (bytes.starts_with("\xEF\xBB\xBF")) bytes.remove_prefix(3);
   Lines lines(bytes);
@@ -152,8 +152,7 @@ Mesh parse_off(std::string_view bytes, std::string_view what) {
       throw InvalidInput(cat(what, ":", lines.line_no(), ": face ", f, " ", problem));
     }
   }
-  io_detail::check_unreferenced(mesh, what);
-  validate(mesh, what);
+  io_detail::check_parsed(mesh, what, faces);
   return mesh;
 }
 

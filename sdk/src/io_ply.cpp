@@ -766,7 +766,7 @@ void put_f32_le(std::string& out, float f) {
 
 }  // namespace
 
-Mesh parse_ply(std::string_view bytes, std::string_view what) {
+Mesh parse_ply(std::string_view bytes, std::string_view what, Faces faces) {
   if (bytes.empty()) throw InvalidInput(cat(what, ": file is empty"));
   Header h = parse_header(bytes, what);
   const std::string_view body = bytes.substr(h.body_offset);
@@ -795,8 +795,7 @@ Mesh parse_ply(std::string_view bytes, std::string_view what) {
     BinaryCursor cur(body, h.format == Format::binary_be, what);
     read_body(cur, h, mesh);
   }
-  io_detail::check_unreferenced(mesh, what);
-  validate(mesh, what);
+  io_detail::check_parsed(mesh, what, faces);
   return mesh;
 }
 

@@ -224,7 +224,7 @@ Mesh parse_ascii(std::string_view bytes, std::string_view what) {
 
 }  // namespace
 
-Mesh parse_stl(std::string_view bytes, std::string_view what) {
+Mesh parse_stl(std::string_view bytes, std::string_view what, Faces faces) {
   if (bytes.empty()) throw InvalidInput(cat(what, ": file is empty"));
   std::uint64_t count = 0;
   if (bytes.size() >= 84) {
@@ -246,7 +246,7 @@ Mesh parse_stl(std::string_view bytes, std::string_view what) {
     throw InvalidInput(
         cat(what, ": not an STL file (too short for binary STL and does not start with 'solid')"));
   }
-  validate(mesh, what);
+  validate(mesh, what, faces);
   return mesh;
 }
 

@@ -167,10 +167,10 @@ int Mesh::add_channel(const ChannelDesc& desc, std::span<const float> fill) {
   return static_cast<int>(channels.size() - 1);
 }
 
-void validate(const Mesh& mesh, std::string_view what) {
+void validate(const Mesh& mesh, std::string_view what, Faces faces) {
   const std::size_t n = mesh.vertex_count();
   if (n == 0) throw InvalidInput(cat(what, ": no vertices"));
-  if (mesh.triangles.empty()) {
+  if (mesh.triangles.empty() && faces == Faces::required) {
     throw InvalidInput(cat(what, ": no faces (point clouds cannot be merged)"));
   }
   if (n > std::numeric_limits<std::uint32_t>::max()) {

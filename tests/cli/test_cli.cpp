@@ -100,6 +100,18 @@ class Cli : public ::testing::Test {
     return p;
   }
 
+  /// m's positions alone, as a binary PLY without a face element (how tests/eval/cases
+  /// stores its ideals).
+  std::string write_points(const Mesh& m, const std::string& name) const {
+    const std::string p = path(name);
+    std::ofstream f(p, std::ios::binary);
+    f << "ply\nformat binary_little_endian 1.0\nelement vertex " << m.vertex_count()
+      << "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+    f.write(reinterpret_cast<const char*>(m.positions.data()),
+            static_cast<std::streamsize>(m.positions.size() * sizeof(Vec3f)));
+    return p;
+  }
+
   test::TestDir scratch_{"csculpt_cli"};
   const fs::path dir_ = scratch_.path();
   int runs_ = 0;
@@ -626,6 +638,15 @@ TEST_F(Cli, MergeExplainOnAManyPartMeshAndItsErrors) {
   }
   EXPECT_LE(share, 1.0 + 1e-9);
 
+  // the same ideal stored without faces (a point set) diagnoses the same
+  fs::remove(out);
+  const std::string points = write_points(read_mesh((c / "ideal.ply").string()), "points.ply");
+  const Result p = run("merge " + edits + " --explain --ideal " + quote(points));
+  expect_one_json_line(p, "merge --explain with a faceless ideal");
+  const test::Json jp = test::JsonParser::parse(p.out);
+  EXPECT_EQ(jp["ideals"][0]["rel_err"].number, j["ideals"][0]["rel_err"].number);
+  EXPECT_EQ(jp["ideals"][0]["max_error"].number, j["ideals"][0]["max_error"].number);
+
   // without an ideal: the edits and folds only
   fs::remove(out);
   const Result bare = run("merge " + edits + " --explain");
@@ -636,7 +657,14 @@ TEST_F(Cli, MergeExplainOnAManyPartMeshAndItsErrors) {
   fs::remove(out);
   const std::string other = write(make_sphere(2000), "other.ply");
   expect_error(run("merge " + edits + " --explain --ideal " + quote(other)), out_dir, other,
-               {"vertices", "triangles"}, "an ideal of another mesh");
+               {"ideal", "vertices"}, "an ideal of another mesh");
+  // the base's vertices with other triangles
+  Mesh rewound = read_mesh((c / "ideal.ply").string());
+  std::swap(rewound.triangles[0][1], rewound.triangles[0][2]);
+  const std::string twisted = write(rewound, "rewound.ply");
+  fs::remove(out);
+  expect_error(run("merge " + edits + " --explain --ideal " + quote(twisted)), out_dir, twisted,
+               {"ideal", "triangles"}, "an ideal with other triangles");
   // --ideal means nothing without --explain
   EXPECT_NE(run("merge " + edits + " --ideal " + quote((c / "ideal.ply").string())).code, 0);
   EXPECT_FALSE(fs::exists(out));

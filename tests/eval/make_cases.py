@@ -6,7 +6,8 @@
 # probe KIND...: prints a mesh's vertex, face and part counts and landmarks.
 # Each case directory holds base.ply, a.ply, b.ply (same vertices and faces, moved
 # by two independent Blender modifier stacks) and ideal.ply where an ideal exists
-# (both stacks applied in sequence, so a detail edit rides along a coarse one).
+# (both stacks applied in sequence, so a detail edit rides along a coarse one). The ideals
+# hold the moved vertices only, without faces (the base's are theirs).
 import bpy, bmesh, struct, sys, os, math, mathutils
 
 out = sys.argv[sys.argv.index("--") + 1] if "--" in sys.argv else "cases"
@@ -23,13 +24,16 @@ def triangulated(obj):
     bm.to_mesh(obj.data); bm.free()
 
 def write_ply(path, verts, faces):
+    """faces None: the positions alone (the ideals: the base's faces are theirs, and
+    leaving them out keeps the committed cases small)"""
     with open(path, "wb") as f:
         f.write(("ply\nformat binary_little_endian 1.0\nelement vertex %d\n"
-                 "property float x\nproperty float y\nproperty float z\n"
-                 "element face %d\nproperty list uchar int vertex_indices\nend_header\n"
-                 % (len(verts), len(faces))).encode())
+                 "property float x\nproperty float y\nproperty float z\n" % len(verts)).encode())
+        if faces is not None:
+            f.write(("element face %d\nproperty list uchar int vertex_indices\n" % len(faces)).encode())
+        f.write(b"end_header\n")
         for v in verts: f.write(struct.pack("<3f", *v))
-        for t in faces: f.write(struct.pack("<B3i", 3, *t))
+        for t in faces or []: f.write(struct.pack("<B3i", 3, *t))
 
 def evaluated_verts(obj):
     dg = bpy.context.evaluated_depsgraph_get()
@@ -382,7 +386,7 @@ def frame_ideal(o, d, faces, base, edited, is_detail, edits):
         vs = [tuple(v.co + x * v.normal + n0.rotation_difference(v.normal) @ ti)
               for v, n0, x, ti in zip(me.vertices, normals, h, t)]
     ev.to_mesh_clear()
-    write_ply(os.path.join(d, "ideal_frame.ply"), vs, faces)
+    write_ply(os.path.join(d, "ideal_frame.ply"), vs, None)
     o.modifiers.clear()
 
 def flips(p, q, faces):
@@ -414,12 +418,12 @@ def case(name, kind, edits, ideal=None, details=None, crop=None):
     if ideal == "stack":
         for edit in edits: edit(o)
         results["ideal"] = evaluated_verts(o)
-        write_ply(os.path.join(d, "ideal.ply"), results["ideal"], faces)
+        write_ply(os.path.join(d, "ideal.ply"), results["ideal"], None)
         o.modifiers.clear()
         if any(is_detail) and not all(is_detail):
             frame_ideal(o, d, faces, base, edited, is_detail, edits)
     elif ideal == "same":
-        edits[0](o); write_ply(os.path.join(d, "ideal.ply"), evaluated_verts(o), faces)
+        edits[0](o); write_ply(os.path.join(d, "ideal.ply"), evaluated_verts(o), None)
     o.modifiers.clear()
     if crop:
         base, faces = cropped(d, base, faces, crop[0](), crop[1])
@@ -457,7 +461,7 @@ def cropped(d, base, faces, centre, radius):
     for f in sorted(os.listdir(d)):
         if f.endswith(".ply"):
             vs = read_ply_verts(os.path.join(d, f))
-            write_ply(os.path.join(d, f), [vs[v] for v in used], kept)
+            write_ply(os.path.join(d, f), [vs[v] for v in used], None if f.startswith("ideal") else kept)
     return [base[v] for v in used], kept
 
 def parts(n, faces, rep):

@@ -33,7 +33,10 @@ namespace csculpt {
 /// otherwise (the writer adds one when needed); unknown header lines are ignored like comments.
 /// STL: corners with bitwise-equal coordinates are welded in order of first occurrence, and
 /// zero-area facets (two equal corners) are dropped, as STL exporters emit them routinely.
-Mesh read_mesh(const std::string& path);
+///
+/// With `faces` optional, a file without faces reads as the positions (and channels) it holds:
+/// a point set such as an ideal result stored without its base's faces.
+Mesh read_mesh(const std::string& path, Faces faces = Faces::required);
 
 /// Writes .ply (binary little-endian, channels as float properties) or .obj (positions and
 /// faces only). Writes to a temporary file and renames it, so a failure leaves no partial file.
@@ -44,9 +47,9 @@ void write_mesh(const Mesh& mesh, const std::string& path);
 
 /// Parses PLY bytes held in memory (what read_mesh does for .ply); `what` names the source
 /// in error messages. Exposed for fuzzing.
-Mesh parse_ply(std::string_view bytes, std::string_view what);
-Mesh parse_obj(std::string_view bytes, std::string_view what);
-Mesh parse_off(std::string_view bytes, std::string_view what);
-Mesh parse_stl(std::string_view bytes, std::string_view what);
+Mesh parse_ply(std::string_view bytes, std::string_view what, Faces faces = Faces::required);
+Mesh parse_obj(std::string_view bytes, std::string_view what, Faces faces = Faces::required);
+Mesh parse_off(std::string_view bytes, std::string_view what, Faces faces = Faces::required);
+Mesh parse_stl(std::string_view bytes, std::string_view what, Faces faces = Faces::required);
 
 }  // namespace csculpt

@@ -91,10 +91,16 @@ struct Mesh {
   int add_channel(const ChannelDesc& desc, std::span<const float> fill = {});
 };
 
+/// Whether a mesh must have faces. A mesh that is merged, captured or written must; the
+/// positions a merge is compared with (an ideal result, stored without its base's faces) need
+/// not.
+enum class Faces { required, optional };
+
 /// Throws InvalidInput (prefixed with `what`, e.g. a file name) when the mesh cannot be
-/// merged: no vertices or faces, a triangle index out of range or repeated within a face,
-/// a NaN/Inf position or channel value, a channel of the wrong size or width.
-void validate(const Mesh& mesh, std::string_view what);
+/// merged: no vertices, no faces (unless `faces` is optional), a triangle index out of range
+/// or repeated within a face, a NaN/Inf position or channel value, a channel of the wrong
+/// size or width.
+void validate(const Mesh& mesh, std::string_view what, Faces faces = Faces::required);
 
 /// Throws InvalidInput unless `edited` has the same vertex count, triangles and channel
 /// layout as `base`.

@@ -595,6 +595,47 @@ TEST(IoObj, ErrorsNameTheLine) {
 // ------------------------------------------------------------------------------------------
 // OFF
 
+// ------------------------------------------------------------------------------------------
+// Point sets: files without faces, read only where faces are optional
+
+TEST(IoPoints, FilesWithoutFacesReadOnlyWhereFacesAreOptional) {
+  const std::string ply_header =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\n";
+  const std::string points = "0 0 0\n1 0 0\n0 1 2\n";
+  const std::string no_face_element = ply_header + "end_header\n" + points;
+  const std::string zero_faces =
+      ply_header + "element face 0\nproperty list uchar int vertex_indices\nend_header\n" + points;
+  for (const std::string& ply : {no_face_element, zero_faces}) {
+    EXPECT_EQ(invalid_input_message([&] { parse_ply(ply, "p.ply"); }),
+              "p.ply: no faces (point clouds cannot be merged)");
+    const Mesh m = parse_ply(ply, "p.ply", Faces::optional);
+    ASSERT_EQ(m.vertex_count(), 3u);
+    EXPECT_EQ(m.face_count(), 0u);
+    EXPECT_EQ(m.positions[2].z, 2.f);
+  }
+  EXPECT_EQ(parse_obj("v 0 0 0\nv 1 0 0\n", "p.obj", Faces::optional).vertex_count(), 2u);
+  EXPECT_EQ(parse_off("OFF\n2 0 0\n0 0 0\n1 0 0\n", "p.off", Faces::optional).vertex_count(), 2u);
+
+  // everything else is checked as before
+  EXPECT_EQ(invalid_input_message([] { parse_obj("v 0 nan 0\n", "n.obj", Faces::optional); }),
+            "n.obj:1: vertex 0: y is NaN");
+  EXPECT_EQ(invalid_input_message([] { parse_obj("# nothing\n", "e.obj", Faces::optional); }),
+            "e.obj: no vertices");
+  EXPECT_EQ(invalid_input_message(
+                [] { parse_off("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n", "r.off",
+                               Faces::optional); }),
+            "r.off:6: face 0: vertex index 3 out of range (3 vertices)");
+  // a mesh whose faces leave over a million of its vertices unused is still refused
+  std::string sparse = "OFF\n1000005 1 0\n";
+  sparse.reserve(sparse.size() + 1000005 * 6 + 16);
+  for (std::size_t v = 0; v < 1000005; ++v) sparse += "0 0 0\n";
+  sparse += "3 0 1 2\n";
+  EXPECT_NE(invalid_input_message([&] { parse_off(sparse, "s.off", Faces::optional); })
+                .find("used by no face"),
+            std::string::npos);
+}
+
 TEST(IoOff, VariantsCommentsAndPolygons) {
   const Mesh plain = parse_off(
       "OFF\n# a comment\n\n4 2 0\n0 0 0\n1 0 0\n1 1 0 # trailing comment\n0 1 0\n4 0 1 2 3\n"
