@@ -1,5 +1,5 @@
 # Builds merge cases from edits authored by Blender's own deformers.
-# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|held4|house|extra|crumple|probe4|...|probe13]
+# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|held4|house|extra|crumple|probe4|...|probe16]
 # (Debian 12: apt-get install blender assimp-testmodels). Add your own case() lines to author more.
 # public, public2: the sets of shared/eval/cases (this file began as shared/eval/make_cases.py);
 # held: tests/eval/cases (see its README.md), which also prints what each case holds;
@@ -486,6 +486,10 @@ def read_ply_verts(path):
 def cast(obj, factor):
     m = obj.modifiers.new("cast", 'CAST'); m.factor = factor; return m
 
+def cast_to(obj, factor, shape):
+    """a Cast toward a sphere, a cylinder or a cuboid ('SPHERE', 'CYLINDER', 'CUBOID')"""
+    m = cast(obj, factor); m.cast_type = shape; return m
+
 def simple(obj, method, factor, axis='Z'):
     m = obj.modifiers.new(method.lower(), 'SIMPLE_DEFORM')
     m.deform_method = method; m.factor = factor; m.deform_axis = axis
@@ -624,6 +628,11 @@ def cast_part_human_swirl_case():
          [lambda o: local_twist(o, *LM["+z"], 0.2, math.radians(60)),
           lambda o: cast_part(o, 0.8, at("+z"), 0.6)], "stack", details=[0])
 
+def wide_bumps_wuson_case():
+    case("wide_bumps_plus_tinygrab_wuson", "wuson",
+         [lambda o: tiny_grab(o, at("+y"), (0.03, 0, 0.02), 0.2),
+          lambda o: bumps(o, 1.2, 0.15, 202)], "stack", details=[0])
+
 def house_grab_case():
     """a detail on a roof of the house and a grab over it that crushes thin walls"""
     case("grab_plus_detail_house", "house",
@@ -726,6 +735,11 @@ elif which == "held4":
     # smoothing carried only what moves 0.4 of its vertices: 0.147 against the frame ideal,
     # sum 0.132)
     smooth_human_grab_case("smooth_plus_wide_tinygrab_human", 0.3, 0.4)  # barely wider
+    # from set probe16b: broad bumps that fold 7,478 of the scan's faces themselves over a
+    # small grab; the repair's widening smoothing ended the merge's last 9 folds by erasing
+    # both edits over 7,223 vertices (2.17 against the frame ideal, sum 0.92; stacked 2.03,
+    # sum 0.32)
+    wide_bumps_wuson_case()
 elif which == "held3":
     # regr01.obj, a house of 275 pieces (32 once welded), not welded: every piece subdivided
     # on its own (its walls' large faces get vertices); the grab crushes thin walls, folding
@@ -1105,6 +1119,55 @@ elif which == "probe15":
     case("smooth_plus_wide_swirl_monkey", "monkey2",
          [lambda o: local_twist(o, *LM["+z"], 0.35, math.radians(40)),
           lambda o: smooth(o, at("+z"), 0.5, 1.0, 20)], "stack", details=[0])
+elif which == "probe16":
+    # pairings none of the sets before had, made after the transport's speed work to look for
+    # new kinds of failure: a Cast to a cuboid and to a cylinder, a Lattice over a pinch on
+    # boxes apart, a swirl under a bend on the letters, a small grab under broad bumps on the
+    # scan, a Shrinkwrap over a detail on the spider as it ships, two details on one spot
+    # under a twist, a Smooth over a detail on the mocap figure, a Wave over a small grab on
+    # the keyboard; scored by hand, not kept
+    case("cuboid_cast_plus_detail_duck", "duck",
+         [lambda o: detail(o, at("+z"), 0.3, 0.04, 201),
+          lambda o: cast_to(o, 0.5, 'CUBOID')], "stack", details=[0])
+    case("cylinder_cast_plus_pinch_monkey", "monkey2",
+         [lambda o: pinch(o, at("+z"), 0.3, 0.6),
+          lambda o: cast_to(o, 0.5, 'CYLINDER')], "stack", details=[0])
+    case("lattice_plus_pinch_cubes", "cubes",
+         [lambda o: pinch(o, at("+x"), 0.3, 0.6),
+          lambda o: lattice(o, {(2, 1, 1): (0.3, 0, 0.2), (2, 2, 2): (0.2, 0.2, 0)})],
+         "stack", details=[0])
+    case("bend_plus_swirl_letters", "letters",
+         [lambda o: local_twist(o, *LM["+y"], 0.3, math.radians(40)),
+          lambda o: bend(o, math.radians(60), 'Z')], "stack", details=[0])
+    case("bumps_plus_tinygrab_wuson", "wuson",
+         [lambda o: tiny_grab(o, at("+y"), (0.03, 0, 0.02), 0.2),
+          lambda o: bumps(o, 0.6, 0.15, 202)], "stack", details=[0])
+    case("shrinkwrap_plus_detail_spider_shipped", "spider_shipped",
+         [lambda o: detail_along(o, at("+y"), 0.3, 0.04, 203, 'Y'),
+          lambda o: shrinkwrap_part(o, at("+y"), 0.6, 0.8)], "stack", details=[0])
+    case("twist_plus_two_details_capsule", "capsule_lo",
+         [lambda o: detail(o, (0.4, 0, 0.5), 0.3, 0.04, 204),
+          lambda o: pinch(o, (0.4, 0, 0.5), 0.25, 0.7),
+          lambda o: twist(o, math.radians(60), 'Z')], "stack", details=[0, 1])
+    case("smooth_plus_detail_mocap", "mocap",
+         [lambda o: detail(o, at("+x"), 0.2, 0.03, 205),
+          lambda o: smooth(o, at("+x"), 0.4, 1.0, 20)], "stack", details=[0])
+    case("wave_plus_tinygrab_keyboard", "keyboard",
+         [lambda o: tiny_grab(o, at("+z"), (0.03, 0.02, 0), 0.2),
+          lambda o: wave(o, 0.08, 0.6)], "stack", details=[0])
+elif which == "probe16b":
+    # the scan's small grab under bumps again, the scales apart (wider bumps, a narrower grab)
+    # and alike, to see where the energies turn; scored by hand, not kept
+    wide_bumps_wuson_case()
+    case("bumps_plus_narrow_tinygrab_wuson", "wuson",
+         [lambda o: tiny_grab(o, at("+y"), (0.02, 0, 0.015), 0.12),
+          lambda o: bumps(o, 0.6, 0.15, 202)], "stack", details=[0])
+    case("bumps_plus_wide_tinygrab_wuson", "wuson",
+         [lambda o: tiny_grab(o, at("+y"), (0.04, 0, 0.03), 0.3),
+          lambda o: bumps(o, 0.6, 0.15, 202)], "stack", details=[0])
+    case("bumps_plus_tinygrab_capsule", "capsule_lo",
+         [lambda o: tiny_grab(o, (0.4, 0, 0.5), (0, 0.03, 0.02), 0.2),
+          lambda o: bumps(o, 0.6, 0.15, 206)], "stack", details=[0])
 elif which == "house":
     house_grab_case()
     case("cast_plus_detail_house", "house",
