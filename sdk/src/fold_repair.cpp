@@ -162,9 +162,10 @@ constexpr Phase kShapeFirst[] = {
 constexpr int kRelaxSweeps = 2;
 constexpr double kRelaxRate = 0.5;
 
-/// A widening smoothing stops before it moves its region by more than this share of the
-/// artists' own displacement there (in squared size: half of it, RMS), and the phase keeps its
-/// best attempt before that. It widens to end folds where the artists' displacements differ by
+/// A widening phase stops once its region stands further from where the transport put it
+/// (every phase's moves so far) than this share of the transport's displacement there, the
+/// artists' edits as merged (summed squared sizes: half of it, RMS), and keeps its best
+/// attempt before that. It widens to end folds where the artists' displacements differ by
 /// more than three rings can absorb, a small change to long strokes (in the sessions of the
 /// crease test and the four-peer demos, 0.001 of their displacement or less). Where an edit
 /// crumples the surface itself (bumps lifting a scan's thin parts by 0.06, folding 7,478 faces

@@ -34,6 +34,7 @@ constexpr std::size_t kSmoothingSamples = 2048;
 /// colleague (the undo's merge sees only the stroke's ring), so containment tells nothing.
 constexpr double kSmoothingReach = 0.75;
 constexpr std::uint32_t kNoSeam = 0xffffffffu;
+constexpr std::uint8_t kNotCached = 0xff;
 
 /// The spread of the faces' turns around a vertex up to which a diff's rotation there is
 /// trusted as a frame, and the spread (a fold between faces) from which it is not at all.
@@ -143,7 +144,9 @@ class Transport {
   bool same_once_;         ///< false: s = 0 (SameChange::add)
   bool hedged_ = false;    ///< carried details are hedged toward their stacked reading
   bool regional_ = false;  ///< the regional Jacobians are fitted
-  std::array<bool, kMaxUsers> turns_cached_{};  ///< per diff: its face turns are in face_turns
+  /// Per diff: its column of face_turns, or kNotCached; carriers_ columns in all.
+  std::array<std::uint8_t, kMaxUsers> cached_{};
+  std::size_t carriers_ = 0;
   void fit_grabs(std::span<const bool> carries);
   double same(const VertexState& s, std::size_t i, std::size_t j) const;
 };
@@ -325,7 +328,6 @@ void Transport::share_normals() {
   }
 }
 
-
 Vec3d Transport::edited_position(std::size_t i, std::uint32_t v) const {
   const TransportInput& u = users_[i];
   if (!has(u.changed, v)) return widen(base_[v]);
@@ -388,7 +390,8 @@ Vec4d Transport::turn_of_face(std::uint32_t f, std::size_t i) const {
 /// turn_of_face(), from the rows cache_face_turns() filled where it did.
 Vec4d Transport::face_turn(std::uint32_t f, std::size_t i) const {
   const std::uint32_t row = f < scratch_.face_row.size() ? scratch_.face_row[f] : kNoRow;
-  if (row != kNoRow && turns_cached_[i]) return scratch_.face_turns[row * n_ + i];
+  if (row != kNoRow && cached_[i] != kNotCached)
+    return scratch_.face_turns[row * carriers_ + cached_[i]];
   return turn_of_face(f, i);
 }
 
@@ -414,7 +417,9 @@ void Transport::for_owned_faces(std::size_t begin, std::size_t end, Visit&& visi
 /// agreement of each of its three vertices reads it. Rows are numbered in chunk order.
 void Transport::cache_face_turns(std::span<const bool> carries, WorkerPool& pool,
                                  std::size_t grain) {
-  std::copy(carries.begin(), carries.end(), turns_cached_.begin());
+  carriers_ = 0;
+  for (std::size_t i = 0; i < n_; ++i)
+    cached_[i] = carries[i] ? static_cast<std::uint8_t>(carriers_++) : kNotCached;
   const std::size_t chunks = (vertices_.size() + grain - 1) / grain;
   auto& first_row = scratch_.chunk_first_row;
   first_row.assign(chunks + 1, 0);
@@ -427,14 +432,15 @@ void Transport::cache_face_turns(std::span<const bool> carries, WorkerPool& pool
   if (scratch_.face_row.size() < topology_.triangles.size())
     scratch_.face_row.resize(topology_.triangles.size(), kNoRow);
   scratch_.row_face.resize(first_row[chunks]);
-  scratch_.face_turns.resize(first_row[chunks] * n_);
+  scratch_.face_turns.resize(first_row[chunks] * carriers_);
   pool.for_chunks(vertices_.size(), grain, [&](std::size_t begin, std::size_t end) {
     std::uint32_t row = first_row[begin / grain];
     for_owned_faces(begin, end, [&](std::uint32_t f) {
       scratch_.face_row[f] = row;
       scratch_.row_face[row] = f;
       for (std::size_t i = 0; i < n_; ++i)
-        if (turns_cached_[i]) scratch_.face_turns[row * n_ + i] = turn_of_face(f, i);
+        if (cached_[i] != kNotCached)
+          scratch_.face_turns[row * carriers_ + cached_[i]] = turn_of_face(f, i);
       ++row;
     });
   });
@@ -852,13 +858,28 @@ void Transport::fit_grabs(std::span<const bool> carries) {
   }
 }
 
+/// Puts the per-vertex levels and per-face rows back to their state between merges when the
+/// transport ends, also by an exception: the next merge reads them.
+struct ScratchReset {
+  TransportScratch& scratch;
+  std::span<const std::uint32_t> vertices;
+  ~ScratchReset() {
+    for (const std::uint32_t v : vertices)
+      if (v < scratch.reads_level.size()) scratch.reads_level[v] = 0;
+    for (const std::uint32_t f : scratch.row_face) scratch.face_row[f] = kNoRow;
+    scratch.row_face.clear();
+  }
+};
+
 }  // namespace
 
-void transport_positions(
-    const Topology& topology, std::span<const Vec3f> base, std::span<const std::uint32_t> vertices,
-    std::span<const TransportInput> users, bool same_once, const JacobianSamples& samples,
-    TransportScratch& scratch, WorkerPool& pool, std::size_t grain,
-    const CarryingFields& carriers, std::span<Vec3f> moved) {
+void transport_positions(const Topology& topology, std::span<const Vec3f> base,
+                         std::span<const std::uint32_t> vertices,
+                         std::span<const TransportInput> users, bool same_once,
+                         const JacobianSamples& samples, TransportScratch& scratch,
+                         WorkerPool& pool, std::size_t grain, const CarryingFields& carriers,
+                         std::span<Vec3f> moved) {
+  const ScratchReset reset{scratch, vertices};
   Transport t(topology, base, vertices, users, same_once, scratch);
   t.find_seams();
   t.share_normals();
@@ -888,8 +909,6 @@ void transport_positions(
     VertexState s;
     for (std::size_t at = begin; at < end; ++at) moved[at] = t.merged(at, s);
   });
-  for (const std::uint32_t v : vertices) scratch.reads_level[v] = 0;
-  for (const std::uint32_t f : scratch.row_face) scratch.face_row[f] = kNoRow;
 }
 
 }  // namespace csculpt::detail

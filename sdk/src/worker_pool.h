@@ -1,6 +1,9 @@
 // Internal: a small persistent pool for the merge's data-parallel loops. Tasks write
 // disjoint outputs, so results do not depend on which thread runs which chunk.
 //
+// A task that throws does not end the process: the region's other tasks still run, and the
+// first exception (in the order they were thrown) is rethrown by run() once all are done.
+//
 // A merge runs a dozen short parallel regions back to back (one per hierarchy level), so
 // threads spin briefly on atomics before sleeping on the condition variable: waking a
 // sleeping thread costs a system call per region, which profiling showed at ~10% of a merge.
@@ -12,9 +15,11 @@
 #include <condition_variable>
 #include <cstddef>
 #include <cstdint>
+#include <exception>
 #include <functional>
 #include <mutex>
 #include <thread>
+#include <utility>
 #include <vector>
 
 namespace csculpt::detail {
@@ -40,16 +45,25 @@ class WorkerPool {
   unsigned size() const { return static_cast<unsigned>(workers_.size()) + 1; }
 
   /// Runs task(i) for i in [0, count), spread over the pool and the calling thread; returns
-  /// when all are done. One task runs inline.
+  /// when all are done, rethrowing the first exception a task threw. One task runs inline.
   void run(std::size_t count, const std::function<void(std::size_t)>& task) {
     if (count == 0) return;
     if (count == 1 || workers_.empty()) {
-      for (std::size_t i = 0; i < count; ++i) task(i);
+      std::exception_ptr error;
+      for (std::size_t i = 0; i < count; ++i) {
+        try {
+          task(i);
+        } catch (...) {
+          if (!error) error = std::current_exception();
+        }
+      }
+      if (error) std::rethrow_exception(error);
       return;
     }
     {
       std::lock_guard<std::mutex> lock(mutex_);
       task_ = &task;
+      error_ = nullptr;
       count_ = count;
       next_.store(0);
       active_.store(static_cast<unsigned>(workers_.size()));
@@ -65,6 +79,12 @@ class WorkerPool {
       std::unique_lock<std::mutex> lock(mutex_);
       done_.wait(lock, [this] { return active_.load() == 0; });
     }
+    std::exception_ptr error;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      error = std::exchange(error_, nullptr);
+    }
+    if (error) std::rethrow_exception(error);
   }
 
   /// Runs body(begin, end) over [0, n) in chunks of `grain`.
@@ -79,7 +99,12 @@ class WorkerPool {
     for (;;) {
       const std::size_t i = next_.fetch_add(1);
       if (i >= count_) return;
-      (*task_)(i);
+      try {
+        (*task_)(i);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (!error_) error_ = std::current_exception();
+      }
     }
   }
   void work() {
@@ -108,6 +133,7 @@ class WorkerPool {
   std::mutex mutex_;
   std::condition_variable wake_, done_;
   const std::function<void(std::size_t)>* task_ = nullptr;
+  std::exception_ptr error_;  ///< the region's first exception, under mutex_
   std::size_t count_ = 0;
   std::atomic<std::size_t> next_{0};
   std::atomic<unsigned> active_{0};
