@@ -305,10 +305,16 @@ TEST(Session, AMergeLongerThanTheExpiryLeavesEveryoneAMember) {
   const Mesh sphere = make_sphere(320000);
   const auto [h, build_time, edits] = two_artists_edits(sphere, 17, 256);
   const std::vector<Diff> diffs = {capture_diff(sphere, edits[0]), capture_diff(sphere, edits[1])};
+  // Timed twice and the faster kept: a merge slowed by a neighbouring test's load (under
+  // ASan, 6.9 s beside a 1M-face compaction, against the session's own 2.2 s) set an expiry
+  // the session's merges never reached.
   Merger merger(h);
-  const auto t0 = Clock::now();
-  merger.merge(sphere, diffs, MergeMethod::full);
-  const auto merge_time = std::chrono::duration_cast<Millis>(Clock::now() - t0);
+  Millis merge_time = Millis::max();
+  for (int k = 0; k < 2; ++k) {
+    const auto t0 = Clock::now();
+    merger.merge(sphere, diffs, MergeMethod::full);
+    merge_time = std::min(merge_time, std::chrono::duration_cast<Millis>(Clock::now() - t0));
+  }
   const Millis expired = std::max(Millis{150}, merge_time / 3);
   auto options = [&](PeerId id) {
     SessionOptions o = fast_options(id);
