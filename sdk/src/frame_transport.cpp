@@ -115,6 +115,8 @@ class Transport {
   Vec3d umbrella(std::size_t i, std::uint32_t v, bool edited) const;
   void carry_inside();
   bool contains(std::size_t i, std::size_t j) const;
+  bool overlaps(std::size_t i, std::size_t j) const;
+  void carry_wholly(std::size_t i, std::size_t j);
   void carry_nested(std::span<const std::size_t> moved);
   void carry_inside_smoothings(std::span<const std::size_t> moved);
   void cache_face_turns(std::span<const bool> carries, WorkerPool& pool, std::size_t grain);
@@ -677,41 +679,43 @@ bool Transport::contains(std::size_t i, std::size_t j) const {
   return true;
 }
 
+/// Whether diffs i and j (i != j) meet: either's rotations would move the other's
+/// displacements somewhere (a carrying energy either way).
+bool Transport::overlaps(std::size_t i, std::size_t j) const {
+  const std::vector<double>& e = scratch_.chunk_energy;
+  return j != i && (e[i * n_ + j] > 0 || e[j * n_ + i] > 0);
+}
+
+/// Diff i carries diff j wholly, and j carries nothing of i.
+void Transport::carry_wholly(std::size_t i, std::size_t j) {
+  scratch_.weight[i * n_ + j] = 1.0;
+  scratch_.weight[j * n_ + i] = 0.0;
+}
+
 /// Each edit carries the overlapping edits that lie wholly inside it and move at most
 /// 1 / kNestedRatio of the vertices it moves.
 void Transport::carry_nested(std::span<const std::size_t> moved) {
-  auto& w = scratch_.weight;
-  const std::vector<double>& e = scratch_.chunk_energy;
   for (std::size_t i = 0; i < n_; ++i)
     for (std::size_t j = 0; j < n_; ++j) {
-      const bool overlap = j != i && (e[i * n_ + j] > 0 || e[j * n_ + i] > 0);
-      if (!overlap || static_cast<double>(moved[j]) * kNestedRatio > static_cast<double>(moved[i]))
-        continue;
-      if (!contains(i, j)) continue;
-      w[i * n_ + j] = 1.0;
-      w[j * n_ + i] = 0.0;
+      const bool small =
+          static_cast<double>(moved[j]) * kNestedRatio <= static_cast<double>(moved[i]);
+      if (overlaps(i, j) && small && contains(i, j)) carry_wholly(i, j);
     }
 }
 
 /// A smoothing carries every edit it overlaps that moves at most kSmoothingReach of the
 /// vertices it moves.
 void Transport::carry_inside_smoothings(std::span<const std::size_t> moved) {
-  auto& w = scratch_.weight;
-  const std::vector<double>& e = scratch_.chunk_energy;
   auto inside = [&](std::size_t i, std::size_t j) {
-    const bool overlap = e[i * n_ + j] > 0 || e[j * n_ + i] > 0;
-    return j != i && overlap &&
+    return overlaps(i, j) &&
            static_cast<double>(moved[j]) <= kSmoothingReach * static_cast<double>(moved[i]);
   };
   for (std::size_t i = 0; i < n_; ++i) {
     bool carries = false;  // the Laplacians are read only where there is something to carry
     for (std::size_t j = 0; j < n_ && !carries; ++j) carries = inside(i, j);
     if (!carries || !smooths(i, moved[i])) continue;
-    for (std::size_t j = 0; j < n_; ++j) {
-      if (!inside(i, j)) continue;
-      w[i * n_ + j] = 1.0;
-      w[j * n_ + i] = 0.0;
-    }
+    for (std::size_t j = 0; j < n_; ++j)
+      if (inside(i, j)) carry_wholly(i, j);
   }
 }
 
