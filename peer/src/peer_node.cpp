@@ -426,7 +426,7 @@ void PeerNode::install_snapshot(std::shared_ptr<const Snapshot> snap,
                                 std::shared_ptr<const Hierarchy> hierarchy, bool journaled) {
   const std::optional<std::uint64_t> fork =
       joined_ ? replication_.fork_point(snap->chains) : std::nullopt;
-  drop_merge();
+  release_base();
   base_ = snap->mesh;
   replication_.reset(snapshot_.version(), snapshot_.chain(), snap->chains);
   snapshot_requested_ = false;
@@ -532,7 +532,7 @@ void PeerNode::apply_version(VersionRecord r, Diff* merged_here) {
   // Checked before the merge in flight is dropped (the check only reads base_, as the worker
   // does): a version that fails, forged or corrupt, must not cost the submits being merged.
   Diff merged = merged_here ? std::move(*merged_here) : replication_.check(r, base_);
-  drop_merge();
+  release_base();
   replication_.append(std::move(r), merged, base_);
   const VersionRecord& kept = replication_.latest();
   const std::uint64_t version = replication_.version();
@@ -734,6 +734,11 @@ void PeerNode::drop_merge() {
   if (!merge_worker_.busy()) return;
   merge_worker_.drop();
   if (merger_) merger_->forget_last();
+}
+
+void PeerNode::release_base() {
+  drop_merge();
+  await_compaction_copy();
 }
 
 void PeerNode::finish_merge() {

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <latch>
 #include <map>
 #include <memory>
 #include <optional>
@@ -139,9 +140,11 @@ class PeerNode {
   /// The snapshot the loader wrote for the journal, put into place (Journal::adopt_snapshot).
   void adopt_journal_snapshot();
   void journal_version(const VersionRecord& r);
-  /// Starts a compaction of the journal's log into a snapshot of our version, written beside
-  /// the network thread (Journal::begin_compaction).
+  /// Starts a compaction of the journal's log into a snapshot of our version, copied, encoded
+  /// and written beside the network thread (Journal::begin_compaction).
   void begin_compaction(Journal& j);
+  /// Before base_ changes: waits until the compaction in flight, if any, has its copy of it.
+  void await_compaction_copy();
   /// Puts a written compaction into place, or removes one the journal gave up.
   void finish_compaction();
   void journal_own();
@@ -168,6 +171,9 @@ class PeerNode {
   /// Before base_ changes other than by our own merge: waits for the merge in flight, if
   /// any, and forgets it.
   void drop_merge();
+  /// Before base_ changes: waits for every task that reads it (drop_merge,
+  /// await_compaction_copy).
+  void release_base();
   /// The merge state for the mesh of base_: `hierarchy` if given, else built here.
   void build_merge_state(std::shared_ptr<const Hierarchy> hierarchy = nullptr);
 
@@ -237,8 +243,13 @@ class PeerNode {
     std::string journal_error;  ///< why that failed (journaling then stops)
   };
   BackgroundTask<LoadedSnapshot> snapshot_loader_{[this] { transport_.wake(); }};
-  /// A journal compaction's snapshot, encoded and written synced; its result is its version.
+  /// A journal compaction's snapshot, copied from base_, encoded and written synced; its
+  /// result is its version. The copy of a mesh of millions of faces takes long enough to
+  /// matter to heartbeats, so it is made on the task's thread, and counts the latch down once
+  /// made; base_ does not change before then (release_base). Shared: the task's count_down may
+  /// still be returning when the network thread's wait does.
   BackgroundTask<std::uint64_t> compaction_writer_{[this] { transport_.wake(); }};
+  std::shared_ptr<std::latch> compaction_copied_;
 
   std::vector<std::uint64_t> inbound_;  // aligned copy of a misaligned message
   std::thread thread_;
