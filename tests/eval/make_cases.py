@@ -1,5 +1,5 @@
 # Builds merge cases from edits authored by Blender's own deformers.
-# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|held4|house|extra|crumple|probe4|...|probe16]
+# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|held4|held5|house|extra|crumple|probe4|...|probe17]
 # (Debian 12: apt-get install blender assimp-testmodels). Add your own case() lines to author more.
 # public, public2: the sets of shared/eval/cases (this file began as shared/eval/make_cases.py);
 # held: tests/eval/cases (see its README.md), which also prints what each case holds;
@@ -304,6 +304,18 @@ def held_object(kind):
         bpy.ops.wm.collada_import(filepath=M + "Collada/COLLADA.dae")
         o = imported(lambda: None, None); normalised(o)
         if kind == "letters": welded(o); subdivided(o, 1)
+    elif kind in ("teapots", "teapots_shipped"):  # teapot_instancenodes.DAE: two Utah teapots
+        # (body, lid, spout and handle apart; their poles degenerate faces)
+        bpy.ops.wm.collada_import(filepath=M + "Collada/teapot_instancenodes.DAE")
+        o = imported(lambda: None, 1060); normalised(o)
+        if kind == "teapots": welded(o); subdivided(o, 2)
+    elif kind in ("c4d", "c4d_shipped"):  # Cinema4D.dae: a cone, a sphere and a box apart
+        bpy.ops.wm.collada_import(filepath=M + "Collada/Cinema4D.dae")
+        o = imported(lambda: None, 707); normalised(o)
+        if kind == "c4d": welded(o); subdivided(o, 2)
+    elif kind == "spider_stl_shipped":  # Spider_binary.stl as it ships (welded by the importer)
+        o = imported(bpy.ops.import_mesh.stl, None, filepath=M + "STL/Spider_binary.stl")
+        normalised(o)
     else:
         raise ValueError(kind)
     bpy.context.view_layer.objects.active = o; o.select_set(True)
@@ -430,7 +442,7 @@ def case(name, kind, edits, ideal=None, details=None, crop=None):
         edited = [read_ply_verts(os.path.join(d, x + ".ply")) for x in "abcdefgh"[:len(edits)]]
         results = {k: read_ply_verts(os.path.join(d, k + ".ply")) for k in results}
     print("CASE", name, len(base), "vertices", len(faces), "faces")
-    if which not in ("held", "held2", "held3", "held4", "house", "extra", "crumple"): return
+    if which not in ("held", "held2", "held3", "held4", "held5", "house", "extra", "crumple"): return
     # what the case holds, for the README: parts, split seams, each edit's size and folds
     rep = coincident(base)
     files = dict(zip("abcdefgh", edited)); files.update(results)
@@ -739,6 +751,21 @@ elif which == "held4":
     # drags it; the energies read the grab as the coarser edit (0.126 against the frame
     # ideal, sum 0.114) until an edit wholly inside one four times wider is carried by it
     bumps_wuson_grab_case()
+elif which == "held5":
+    # from set probe17, three small meshes as they ship that no set before had: two Utah
+    # teapots (body, lid, spout and handle apart; degenerate triangles at their poles) and the
+    # STL spider (welded by the importer): a Cast over an axis detail, a taper over a small
+    # grab, and two axis details under a twist
+    case("cast_plus_detail_teapots_shipped", "teapots_shipped",
+         [lambda o: detail_along(o, at("+x"), 0.3, 0.04, 302, 'X'),
+          lambda o: cast(o, 0.4)], "stack", details=[0])
+    case("taper_plus_tinygrab_teapots_shipped", "teapots_shipped",
+         [lambda o: tiny_grab(o, at("+y"), (0.03, 0, 0.03), 0.25),
+          lambda o: simple(o, 'TAPER', 0.6, 'Z')], "stack", details=[0])
+    case("three_artists_spider_stl_shipped", "spider_stl_shipped",
+         [lambda o: detail_along(o, at("+y"), 0.3, 0.05, 314, 'Y'),
+          lambda o: detail_along(o, at("-y"), 0.3, 0.05, 315, 'Z'),
+          lambda o: twist(o, math.radians(45), 'Z')], "stack", details=[0, 1])
 elif which == "held3":
     # regr01.obj, a house of 275 pieces (32 once welded), not welded: every piece subdivided
     # on its own (its walls' large faces get vertices); the grab crushes thin walls, folding
@@ -1167,6 +1194,62 @@ elif which == "probe16b":
     case("bumps_plus_tinygrab_capsule", "capsule_lo",
          [lambda o: tiny_grab(o, (0.4, 0, 0.5), (0, 0.03, 0.02), 0.2),
           lambda o: bumps(o, 0.6, 0.15, 206)], "stack", details=[0])
+elif which == "probe17":
+    # meshes no set before used (two teapots, a cone, sphere and box, the STL spider), to look
+    # for new kinds of failure; scored by hand, not kept
+    case("grab_plus_detail_teapots", "teapots",
+         [lambda o: detail(o, at("+z"), 0.25, 0.04, 301),
+          lambda o: grab(o, at("+z"), at("+z", 1, (0.1, 0.05, 0.15)), 0.5)], "stack", details=[0])
+    case("cast_plus_detail_teapots_shipped", "teapots_shipped",
+         [lambda o: detail_along(o, at("+x"), 0.3, 0.04, 302, 'X'),
+          lambda o: cast(o, 0.4)], "stack", details=[0])
+    case("twist_plus_pinch_c4d", "c4d",
+         [lambda o: pinch(o, at("+y"), 0.3, 0.6),
+          lambda o: twist(o, math.radians(60), 'Z')], "stack", details=[0])
+    case("disjoint_c4d", "c4d",
+         [lambda o: detail(o, at("+x"), 0.25, 0.04, 303),
+          lambda o: grab(o, at("-x"), at("-x", 1, (-0.1, 0, 0.1)), 0.35)], "stack", details=[0])
+    case("bend_plus_strong_detail_spider_stl_shipped", "spider_stl_shipped",
+         [lambda o: detail_along(o, at("+z"), 0.35, 0.15, 304, 'Z'),
+          lambda o: bend(o, math.radians(120), 'X')], "stack", details=[0])
+    case("three_artists_teapots", "teapots",
+         [lambda o: detail(o, at("+y"), 0.25, 0.04, 305),
+          lambda o: tiny_grab(o, at("-y"), (0.03, 0, 0.02), 0.2),
+          lambda o: simple(o, 'BEND', math.radians(60), 'X')], "stack", details=[0, 1])
+    case("smooth_plus_swirl_teapots", "teapots",
+         [lambda o: local_twist(o, *LM["+z"], 0.25, math.radians(50)),
+          lambda o: smooth(o, at("+z"), 0.5, 1.0, 20)], "stack", details=[0])
+    case("lattice_plus_detail_c4d", "c4d",
+         [lambda o: detail(o, at("+z"), 0.3, 0.05, 306),
+          lambda o: lattice(o, {(2, 2, 2): (0.3, 0.2, 0.2), (0, 1, 1): (-0.2, 0, 0.1)})],
+         "stack", details=[0])
+    case("taper_plus_tinygrab_teapots_shipped", "teapots_shipped",
+         [lambda o: tiny_grab(o, at("+y"), (0.03, 0, 0.03), 0.25),
+          lambda o: simple(o, 'TAPER', 0.6, 'Z')], "stack", details=[0])
+elif which == "probe17b":
+    # more on probe17's meshes: edits on touching parts (a teapot's lid and its body), four
+    # artists, a Cast over the three shapes; scored by hand, not kept
+    case("lid_grab_plus_detail_teapots", "teapots",
+         [lambda o: detail(o, near(o, plus(at("+z"), (0, 0, -0.12)))[0], 0.1, 0.03, 311),
+          lambda o: grab(o, at("+z"), at("+z", 1, (0, 0, 0.1)), 0.08)], "stack", details=[0])
+    case("disjoint_lid_body_teapots", "teapots",
+         [lambda o: detail(o, near(o, plus(at("+z"), (0.15, 0, -0.3)))[0], 0.1, 0.03, 316),
+          lambda o: grab(o, at("+z"), at("+z", 1, (0, 0, 0.1)), 0.1)], "stack", details=[0])
+    case("four_artists_teapots", "teapots",
+         [lambda o: detail(o, at("+y"), 0.25, 0.04, 312),
+          lambda o: pinch(o, at("-y"), 0.25, 0.6),
+          lambda o: simple_part(o, 'TWIST', math.radians(45), 'Z', 0.0, below=True),
+          lambda o: grab(o, at("+z"), at("+z", 1, (0.1, 0, 0.1)), 0.5)], "stack", details=[0, 1])
+    case("cast_plus_detail_c4d", "c4d",
+         [lambda o: detail(o, at("+y"), 0.25, 0.04, 313),
+          lambda o: cast(o, 0.5)], "stack", details=[0])
+    case("three_artists_spider_stl_shipped", "spider_stl_shipped",
+         [lambda o: detail_along(o, at("+y"), 0.3, 0.05, 314, 'Y'),
+          lambda o: detail_along(o, at("-y"), 0.3, 0.05, 315, 'Z'),
+          lambda o: twist(o, math.radians(45), 'Z')], "stack", details=[0, 1])
+    case("grab_plus_swirl_c4d", "c4d",
+         [lambda o: local_twist(o, *LM["+x"], 0.25, math.radians(50)),
+          lambda o: grab(o, at("+x"), at("+x", 1, (0.15, 0.1, 0.1)), 0.6)], "stack", details=[0])
 elif which == "house":
     house_grab_case()
     case("cast_plus_detail_house", "house",
