@@ -93,6 +93,8 @@ void PeerNode::loop() {
       finish_merge();
       finish_load();
       finish_compaction();
+      finish_snapshot_encoding();
+      send_snapshot_chunks();
       if (!run_commands()) break;
       run_timers(Clock::now());
       publish_stats();
@@ -112,6 +114,7 @@ Clock::time_point PeerNode::next_deadline() const {
   // Before the mesh came there is nobody to show a cursor to (and the timer would be past).
   const Clock::time_point t =
       joined_ ? std::min(next_heartbeat_, presence_.next_send(changed, any)) : next_heartbeat_;
+  if (!outgoing_snapshots_.empty()) return Clock::now();  // chunks to send: no waiting
   return merge_waiting() ? std::min(t, last_merge_ + options_.sync) : t;
 }
 
@@ -120,7 +123,8 @@ bool PeerNode::merge_waiting() const {
 }
 
 void PeerNode::receive_all() {
-  for (int i = 0; i < 1000; ++i) {  // then the timers get a turn
+  const Clock::time_point end = Clock::now() + kTurn;
+  for (int i = 0; i < 1000 && Clock::now() < end; ++i) {  // then the timers get a turn
     Inbound message;
     if (!transport_.receive(message)) return;
     // Stamped when handled, not when the wait returned: a message handled after a long step (a
@@ -487,6 +491,7 @@ void PeerNode::expire(Clock::time_point now) {
     if (const auto it = before.find(p); it != before.end() && !it->second.endpoint.empty()) {
       lost_[it->second.endpoint] = now;
       transport_.disconnect(it->second.endpoint);  // greeted over a new connection
+      drop_outgoing_snapshot(p);  // what was queued went with the connection: it asks again
     }
     departed(p, "expired");
   }
@@ -593,19 +598,6 @@ void PeerNode::request_snapshot(PeerId from) {
 /// Chunks of a snapshot have come lately: it is on its way.
 bool PeerNode::snapshot_flowing(Clock::time_point now) const {
   return now - last_snapshot_chunk_ < kSnapshotRetry;
-}
-
-void PeerNode::send_snapshot(PeerId peer) {
-  if (!joined_) return;
-  const Bytes bytes = host_.encode_snapshot_of(base_, replication_.recent_chains(kChainsSent));
-  host_.update_stats([](SessionStats& s) { ++s.snapshots_sent; });
-  const std::size_t chunk = std::max<std::size_t>(1024, options_.snapshot_chunk_bytes);
-  for (std::size_t offset = 0; offset < bytes.size(); offset += chunk) {
-    const std::size_t n = std::min(chunk, bytes.size() - offset);
-    send_to_peer(
-        peer, snapshot_chunk_message(header(), replication_.version(), replication_.chain(), offset,
-                                     bytes.size(), {bytes.data() + offset, n}));
-  }
 }
 
 // ---- outbound ---------------------------------------------------------------------------------
@@ -734,11 +726,6 @@ void PeerNode::drop_merge() {
   if (!merge_worker_.busy()) return;
   merge_worker_.drop();
   if (merger_) merger_->forget_last();
-}
-
-void PeerNode::release_base() {
-  drop_merge();
-  await_compaction_copy();
 }
 
 void PeerNode::finish_merge() {

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <deque>
 #include <latch>
 #include <map>
 #include <memory>
@@ -39,6 +40,37 @@ namespace csculpt::peer {
 constexpr Millis kGreetLostFor{10 * 60 * 1000};
 /// How long a snapshot asked for (or a joiner's) may take before it is asked for again.
 constexpr Millis kSnapshotRetry{2000};
+
+/// A snapshot as sent: of `version` at `chain`.
+struct EncodedSnapshot {
+  std::uint64_t version = 0;
+  std::uint64_t chain = 0;
+  std::shared_ptr<const Bytes> bytes;
+};
+
+/// A snapshot on its way to `peer` at `endpoint`, sent up to `offset`.
+struct OutgoingSnapshot {
+  PeerId peer = 0;
+  std::string endpoint;
+  EncodedSnapshot snapshot;
+  std::size_t offset = 0;
+};
+
+/// How long the loop sends snapshots' chunks, or handles messages, before the timers (our
+/// heartbeats) get a turn: a snapshot of millions of faces is hundreds of chunks, and under
+/// sanitizers each costs milliseconds.
+constexpr Millis kTurn{10};
+
+/// Runs `copy`, a task's copy of the network thread's mesh, and then counts `copied` down,
+/// whether it returned or threw (PeerNode::release_base waits for it).
+template <class Copy>
+auto copy_then_count_down(std::latch& copied, Copy&& copy) {
+  struct CountDown {
+    std::latch& latch;
+    ~CountDown() { latch.count_down(); }
+  } done{copied};
+  return copy();
+}
 
 class PeerNode {
  public:
@@ -128,7 +160,24 @@ class PeerNode {
                         Clock::time_point now);
   void request_snapshot(PeerId from);
   bool snapshot_flowing(Clock::time_point now) const;
+
+  // serving snapshots (peer_node_snapshot.cpp): encoded beside the network thread, once per
+  // version however many ask
+  /// Sends `peer` a snapshot of our version, or of one it can fetch onward from.
   void send_snapshot(PeerId peer);
+  void begin_snapshot_encoding();
+  /// Queues the encoded snapshot for those waiting for it.
+  void finish_snapshot_encoding();
+  /// Queues `e` for `peer`, unless one is already on its way to it.
+  void queue_snapshot(PeerId peer, const EncodedSnapshot& e);
+  /// Sends queued chunks for one turn (kTurn), in the order queued.
+  void send_snapshot_chunks();
+  void drop_outgoing_snapshot(PeerId peer);
+  /// A latch a task counts down once it has its copy of base_ (copy_then_count_down).
+  std::shared_ptr<std::latch> begin_base_copy();
+  /// Before base_ changes: waits for the merge in flight (drop_merge) and for every task's
+  /// copy of it.
+  void release_base();
 
   // the journal (peer_node_journal.cpp): one call per event; a failure is reported and ends
   // journaling, never the session
@@ -143,8 +192,6 @@ class PeerNode {
   /// Starts a compaction of the journal's log into a snapshot of our version, copied, encoded
   /// and written beside the network thread (Journal::begin_compaction).
   void begin_compaction(Journal& j);
-  /// Before base_ changes: waits until the compaction in flight, if any, has its copy of it.
-  void await_compaction_copy();
   /// Puts a written compaction into place, or removes one the journal gave up.
   void finish_compaction();
   void journal_own();
@@ -171,9 +218,6 @@ class PeerNode {
   /// Before base_ changes other than by our own merge: waits for the merge in flight, if
   /// any, and forgets it.
   void drop_merge();
-  /// Before base_ changes: waits for every task that reads it (drop_merge,
-  /// await_compaction_copy).
-  void release_base();
   /// The merge state for the mesh of base_: `hierarchy` if given, else built here.
   void build_merge_state(std::shared_ptr<const Hierarchy> hierarchy = nullptr);
 
@@ -244,12 +288,18 @@ class PeerNode {
   };
   BackgroundTask<LoadedSnapshot> snapshot_loader_{[this] { transport_.wake(); }};
   /// A journal compaction's snapshot, copied from base_, encoded and written synced; its
-  /// result is its version. The copy of a mesh of millions of faces takes long enough to
-  /// matter to heartbeats, so it is made on the task's thread, and counts the latch down once
-  /// made; base_ does not change before then (release_base). Shared: the task's count_down may
-  /// still be returning when the network thread's wait does.
+  /// result is its version.
   BackgroundTask<std::uint64_t> compaction_writer_{[this] { transport_.wake(); }};
-  std::shared_ptr<std::latch> compaction_copied_;
+  /// The snapshot asked for by snapshot_waiters_, copied from base_ and encoded.
+  BackgroundTask<EncodedSnapshot> snapshot_encoder_{[this] { transport_.wake(); }};
+  EncodedSnapshot served_;  // the last one encoded: sent again to whoever asks at its version
+  std::vector<PeerId> snapshot_waiters_;
+  std::deque<OutgoingSnapshot> outgoing_snapshots_;
+  /// The tasks' copies of base_ in the making. A copy of a mesh of millions of faces takes
+  /// long enough to matter to heartbeats, so a task makes its own on its thread and counts
+  /// its latch down once made; base_ does not change before then (release_base). Shared:
+  /// a task's count_down may still be returning when the network thread's wait does.
+  std::vector<std::shared_ptr<std::latch>> base_copies_;
 
   std::vector<std::uint64_t> inbound_;  // aligned copy of a misaligned message
   std::thread thread_;

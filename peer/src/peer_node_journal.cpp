@@ -77,27 +77,14 @@ void PeerNode::journal_version(const VersionRecord& r) {
 void PeerNode::begin_compaction(Journal& j) {
   const std::uint64_t version = replication_.version(), chain = replication_.chain();
   j.begin_compaction(version, chain);
-  compaction_copied_ = std::make_shared<std::latch>(1);
-  compaction_writer_.start([&host = host_, &base = base_, copied = compaction_copied_,
+  compaction_writer_.start([&host = host_, &base = base_, copied = begin_base_copy(),
                             chains = replication_.recent_chains(kChainsSent), dir = j.dir(),
                             version, chain] {
-    std::optional<Snapshot> snap;
-    try {
-      snap = host.snapshot_of(base, chains);
-    } catch (...) {
-      copied->count_down();
-      throw;
-    }
-    copied->count_down();
-    write_compaction_snapshot(dir, encode_snapshot(*snap), version, chain);
+    const Snapshot snap =
+        copy_then_count_down(*copied, [&] { return host.snapshot_of(base, chains); });
+    write_compaction_snapshot(dir, encode_snapshot(snap), version, chain);
     return version;
   });
-}
-
-void PeerNode::await_compaction_copy() {
-  if (!compaction_copied_) return;
-  compaction_copied_->wait();
-  compaction_copied_.reset();
 }
 
 void PeerNode::finish_compaction() {

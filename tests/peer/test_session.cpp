@@ -17,6 +17,7 @@
 #include "csculpt/peer/session.h"
 #include "csculpt/testkit/generate.h"
 #include "sessions.h"
+#include "snapshot.h"
 
 namespace {
 
@@ -383,6 +384,57 @@ TEST(Session, AJoinLongerThanTheExpiryLeavesTheJoinerAMember) {
     EXPECT_NE(e.kind, EventKind::peer_left) << "the creator expired peer " << e.peer;
   EXPECT_EQ(a->peers().size(), 1u);
   EXPECT_EQ(b->version(), a->version());
+}
+
+Millis encoding_time(const Mesh& mesh) {
+  const auto t0 = Clock::now();
+  const std::vector<std::uint8_t> bytes =
+      encode_snapshot(mesh, MergeFrame::fit(mesh.positions), {});
+  EXPECT_GT(bytes.size(), 0u);
+  return std::chrono::duration_cast<Millis>(Clock::now() - t0);
+}
+
+// Serving a joiner copies and encodes the whole mesh: at millions of faces, longer than the
+// expiry. On the network thread that silenced the server, and the members already in the
+// session took it for gone whenever someone joined. The expiry here is half of what encoding
+// this mesh's snapshot takes, timed here (sanitizers slow both alike, and under them a
+// smaller mesh is enough): the snapshot is encoded beside the network thread, the member
+// already in never sees the server leave, and the third peer joins.
+TEST(Session, ServingASnapshotLongerThanTheExpiryLeavesTheServerAMember) {
+  Mesh mesh;
+  Millis encoding{0};
+  for (std::uint32_t faces = 250000; encoding < Millis{300} && faces <= 4000000; faces *= 2) {
+    mesh = make_sphere(faces);
+    encoding = encoding_time(mesh);
+  }
+  std::printf("%zu faces, encoding %lld ms\n", mesh.triangles.size(),
+              static_cast<long long>(encoding.count()));
+  // 150 ms: shorter expiries are missed by scheduling alone on a loaded machine. A release
+  // build encodes 4M faces in less (75 ms; 8M faces would take 4 GB for 150 ms): the sanitizer
+  // builds run it.
+  if (encoding < Millis{300}) GTEST_SKIP() << "encoding 4M faces takes less than 300 ms here";
+  const Millis expired = encoding / 2;
+  auto options = [&](PeerId id) {
+    SessionOptions o = fast_options(id);
+    o.membership = {expired / 8, expired / 2, expired};
+    // Small chunks: under TSan a joiner takes in 1 MB in 300 ms (its shadow memory's page
+    // faults), longer than this expiry; beats go out between chunks.
+    o.snapshot_chunk_bytes = std::size_t{1} << 16;
+    return o;
+  };
+  auto a = Session::create(mesh, options(1));
+  auto b = Session::join(a->invite(), options(2), Millis{120000});
+  ASSERT_TRUE(
+      wait_until([&] { return a->peers().size() == 1 && b->peers().size() == 1; }, Millis{60000}));
+  b->poll_events();
+  auto c = Session::join(a->invite(), options(3), Millis{120000});
+  ASSERT_TRUE(wait_until([&] { return c->peers().size() == 2; }, Millis{60000}));
+  std::this_thread::sleep_for(2 * expired);
+  for (const Event& e : b->poll_events())
+    EXPECT_FALSE(e.kind == EventKind::peer_left && e.peer == 1) << "the server expired";
+  EXPECT_EQ(b->stats().merger, 1u);
+  EXPECT_EQ(a->stats().snapshots_sent, 2u);
+  EXPECT_EQ(c->version(), a->version());
 }
 
 }  // namespace

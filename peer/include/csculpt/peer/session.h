@@ -128,7 +128,7 @@ struct SessionStats {
   std::uint64_t messages_dropped = 0;  ///< malformed, hostile, another session's
   std::uint64_t stale_ignored = 0;     ///< of a stale epoch or from a non-merger
   std::uint64_t auth_rejected = 0;     ///< connections without the session key
-  std::uint64_t snapshots_sent = 0;
+  std::uint64_t snapshots_sent = 0;    ///< whole snapshots sent: every chunk handed to ZeroMQ
   std::uint64_t fetches = 0;
   /// Connections closed before completing a handshake: clients that connected and said nothing
   /// for the handshake timeout (3 s), or hung up midway. Not in csc_session_stats.
