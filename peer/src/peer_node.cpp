@@ -110,11 +110,11 @@ void PeerNode::loop() {
 /// The earliest timer: the heartbeat, our presence, and, while we are the merger and hold
 /// submits, the next merge.
 Clock::time_point PeerNode::next_deadline() const {
+  if (!outgoing_snapshots_.empty()) return Clock::now();  // chunks to send: no waiting
   const auto [changed, any] = host_.presence_state();
   // Before the mesh came there is nobody to show a cursor to (and the timer would be past).
   const Clock::time_point t =
       joined_ ? std::min(next_heartbeat_, presence_.next_send(changed, any)) : next_heartbeat_;
-  if (!outgoing_snapshots_.empty()) return Clock::now();  // chunks to send: no waiting
   return merge_waiting() ? std::min(t, last_merge_ + options_.sync) : t;
 }
 

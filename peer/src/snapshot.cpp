@@ -112,8 +112,8 @@ bool SnapshotAssembly::add(std::uint64_t version, std::uint64_t chain, std::uint
     version_ = version;
     chain_ = chain;
     total_ = total;
-    // Grown as chunks come: zeroing tens of MB at the first one held the network thread
-    // (450 ms at 2M faces under TSan), past a joiner's expiry.
+    // Grown as chunks come: zeroing tens of MB at the first one held the network thread past
+    // a joiner's expiry under TSan.
     buffer_.clear();
     buffer_.reserve(total);
     received_ = 0;
@@ -138,7 +138,7 @@ std::vector<std::uint8_t> SnapshotAssembly::take() {
 
 void SnapshotAssembly::reset() {
   take();
-  version_ = ~std::uint64_t{0};
+  version_ = kNone;
 }
 
 }  // namespace csculpt::peer

@@ -53,9 +53,9 @@ class SnapshotAssembly {
   std::uint64_t chain() const { return chain_; }
 
  private:
-  std::uint64_t version_ = ~std::uint64_t{0};  // of the snapshot being assembled; none yet
-  std::uint64_t chain_ = 0;
   static constexpr std::uint64_t kNone = ~std::uint64_t{0};
+  std::uint64_t version_ = kNone;  // of the snapshot being assembled; none yet
+  std::uint64_t chain_ = 0;
   std::uint64_t total_ = kNone;                  // bytes of the snapshot being assembled
   std::vector<std::uint8_t> buffer_;             // up to `total_` bytes, grown as chunks come
   std::map<std::uint64_t, std::size_t> chunks_;  // offset -> size of the chunks added

@@ -411,7 +411,7 @@ TEST(Session, ServingASnapshotLongerThanTheExpiryLeavesTheServerAMember) {
               static_cast<long long>(encoding.count()));
   // At most 2M faces: three peers of 4M took 9 GB under TSan. Expiries under 150 ms are
   // missed by scheduling alone on a loaded machine, and a release or ASan build encodes 2M
-  // faces in less (40 and 76 ms): the TSan build runs it (250-400 ms).
+  // faces in less (about 40 and 80 ms): the TSan build runs it (250-400 ms).
   if (encoding < Millis{250}) GTEST_SKIP() << "encoding 2M faces takes less than 250 ms here";
   const Millis expired = std::max(Millis{150}, encoding / 2);
   auto options = [&](PeerId id) {
