@@ -8,7 +8,8 @@ prints its table, and asserts on `full`:
   - disjoint and identical cases: rel_err <= 0.01 against every ideal the case has;
   - every case where a detail and a coarse edit meet (it has ideal_frame.ply): against the
     frame ideal below both "(sum)" and "(weighted-translation)"; against the stacked ideal
-    never worse than 1.5 x "(sum)" (a miss prints how far apart the two ideals are);
+    never worse than 1.5 x "(sum)" (a miss prints how far apart the two ideals are), and
+    where that misses, no farther from the stacked ideal than the frame ideal is;
   - new_folds (faces flipped by the merge but by no edit) no more than "(sum)"'s;
   - every artist scored (artists.py): against the frame ideal, on each artist's own support,
     full keeps no less of that artist's edit than "(sum)" does (within ARTIST_SLACK, the
@@ -18,8 +19,9 @@ prints its table, and asserts on `full`:
   - every method the scorer ran produced a result.
 KNOWN_LIMITS lists the rule violations that are understood and documented in
 docs/merge-quality.md: they are printed on every run, and a known limit that no longer
-occurs is reported so the list stays true; KNOWN_BOUNDS holds some cases to a tighter factor
-of sum than the rules. Exits 0 when every other rule holds, 1 with one message per violation
+occurs is reported so the list stays true; so is a miss of the stack rule where the stacked
+ideal is sum itself and the frame ideal is not (STACK_IS_SUM), where no merge can meet both.
+KNOWN_BOUNDS holds some cases to a tighter factor of sum than the rules. Exits 0 when every other rule holds, 1 with one message per violation
 otherwise, 77 (SKIP) when a cases directory or numpy is missing.
 """
 import os
@@ -36,10 +38,16 @@ EXACT_LIMIT = 0.01
 STACK_FACTOR = 1.5
 ROUGHNESS_LIMIT = 1.2
 ARTIST_SLACK = 0.005
+# Where sum is this close to the stacked ideal, that ideal is sum itself (a Hook by a vertex
+# group, a bend about the detail's own direction): if the frame ideal is not, the stack rule
+# (within 1.5 x 0) and the frame rule (below sum) exclude each other, and the stack rule is
+# reported as a known limit, the sanity bound below still asserted.
+STACK_IS_SUM = 0.001
 ROW = re.compile(r"^(\S+)\s+(\S+)\s+(rel_err|roughness|new_folds)=(\S+)$")
 
 # (case, rule) -> why. Rules: "frame", "stack", "artist", "folds", ... See
-# docs/merge-quality.md, "Limits". Empty: every rule holds on every committed case.
+# docs/merge-quality.md, "Limits". Empty: every rule holds on every committed case, but for
+# the stack rule where it cannot (STACK_IS_SUM).
 KNOWN_LIMITS = {}
 # Cases that must hold a tighter factor of sum than the rules': none now.
 KNOWN_BOUNDS = {}
@@ -104,8 +112,14 @@ def check(results, cases, apart=lambda case: 0.0):
             bounded(case, "frame", v, value(case + "/frame", "(sum)", "rel_err"))
             v, s = value(case, "full", "rel_err"), value(case, "(sum)", "rel_err")
             if v is not None and s is not None and not v <= STACK_FACTOR * s:
-                problems.append((case, "stack", "stacked ideal: full %.4f > %.1f x sum %.4f; "
+                rule = "stack is sum" if s <= STACK_IS_SUM and apart(case) > EXACT_LIMIT else "stack"
+                problems.append((case, rule, "stacked ideal: full %.4f > %.1f x sum %.4f; "
                                  "the ideals are %.4f apart" % (v, STACK_FACTOR, s, apart(case))))
+                # Even where the rule cannot be met, full is no farther from the stack
+                # than the frame ideal is: the stacked ideal as a sanity check.
+                if not v <= apart(case):
+                    problems.append((case, "stack sanity", "stacked ideal: full %.4f is farther "
+                                     "from it than the frame ideal (%.4f)" % (v, apart(case))))
             bounded(case, "stack", v, s)
         v = value(case, "full", "roughness")
         if v is not None and not v <= ROUGHNESS_LIMIT:
@@ -164,10 +178,13 @@ def main():
         for case in here:
             problems += check_artists(binary, d, case)
         cases += here
-    known = [p for p in problems if (p[0], p[1]) in KNOWN_LIMITS]
-    new = [p for p in problems if (p[0], p[1]) not in KNOWN_LIMITS]
+    limits = dict(KNOWN_LIMITS)
+    limits.update({(p[0], p[1]): "the stacked ideal is sum itself, the frame ideal is not: "
+                   "no merge meets both rules" for p in problems if p[1] == "stack is sum"})
+    known = [p for p in problems if (p[0], p[1]) in limits]
+    new = [p for p in problems if (p[0], p[1]) not in limits]
     for case, rule, message in known:
-        print("known limit: %s: %s (%s)" % (case, message, KNOWN_LIMITS[(case, rule)]))
+        print("known limit: %s: %s (%s)" % (case, message, limits[(case, rule)]))
     gone = set(KNOWN_LIMITS) - {(p[0], p[1]) for p in known}
     for case, rule in sorted(gone):
         if case in cases:

@@ -1,5 +1,5 @@
 # Builds merge cases from edits authored by Blender's own deformers.
-# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|held4|held5|house|extra|crumple|probe4|...|probe17]
+# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|held4|held5|held6|house|extra|crumple|probe4|...|probe17]
 # (Debian 12: apt-get install blender assimp-testmodels). Add your own case() lines to author more.
 # public, public2: the sets of shared/eval/cases (this file began as shared/eval/make_cases.py);
 # held: tests/eval/cases (see its README.md), which also prints what each case holds;
@@ -442,7 +442,7 @@ def case(name, kind, edits, ideal=None, details=None, crop=None):
         edited = [read_ply_verts(os.path.join(d, x + ".ply")) for x in "abcdefgh"[:len(edits)]]
         results = {k: read_ply_verts(os.path.join(d, k + ".ply")) for k in results}
     print("CASE", name, len(base), "vertices", len(faces), "faces")
-    if which not in ("held", "held2", "held3", "held4", "held5", "house", "extra", "crumple"): return
+    if which not in ("held", "held2", "held3", "held4", "held5", "held6", "house", "extra", "crumple"): return
     # what the case holds, for the README: parts, split seams, each edit's size and folds
     rep = coincident(base)
     files = dict(zip("abcdefgh", edited)); files.update(results)
@@ -622,6 +622,20 @@ def smooth_axe_case():
          [lambda o: detail(o, at("+x"), 0.25, 0.08, 180),
           lambda o: smooth(o, at("+x"), 0.6, 1.0, 30)], "stack", details=[0])
 
+def hook_capsule_case():
+    """a weak detail under a Hook by a vertex group: each vertex moves by its weight times the
+    empty's offset, wherever the detail put it, so the stacked ideal is exactly addition"""
+    case("hook_plus_weak_detail_capsule", "capsule_lo",
+         [lambda o: detail(o, (0, 0.4, 0.3), 0.3, 0.012, 117),
+          lambda o: hook(o, (0, 0.4, 0.3), (0, 0.25, 0.15), 0.7)], "stack", details=[0])
+
+def bend_axe_shipped_case():
+    """a detail along the bend's axis on the axe as it ships: the bend turns about that axis
+    by an angle that does not depend on it, so the stacked ideal is exactly addition"""
+    case("bend_plus_detail_axe_shipped", "axe_shipped",
+         [lambda o: detail_along(o, at("+z"), 0.25, 0.04, 151, 'Y'),
+          lambda o: bend(o, math.radians(60), 'Y')], "stack", details=[0])
+
 def smooth_suzanne_pinch_case():
     """a pinch on the shipped Suzanne's face under a Smooth of it"""
     case("smooth_plus_pinch_suzanne_shipped", "suzanne_shipped",
@@ -766,6 +780,12 @@ elif which == "held5":
          [lambda o: detail_along(o, at("+y"), 0.3, 0.05, 314, 'Y'),
           lambda o: detail_along(o, at("-y"), 0.3, 0.05, 315, 'Z'),
           lambda o: twist(o, math.radians(45), 'Z')], "stack", details=[0, 1])
+elif which == "held6":
+    # from sets probe6 and probe10: the two kinds of case whose stacked ideal is exactly
+    # addition while the frame ideal is not (docs/merge-quality.md, "Limits"): no merge can be
+    # below "sum" against the one and within 1.5x "sum" (0) against the other
+    hook_capsule_case()
+    bend_axe_shipped_case()
 elif which == "held3":
     # regr01.obj, a house of 275 pieces (32 once welded), not welded: every piece subdivided
     # on its own (its walls' large faces get vertices); the grab crushes thin walls, folding
@@ -875,9 +895,7 @@ elif which == "probe6":
     case("bumps_plus_strong_detail_mocap", "mocap",
          [lambda o: detail(o, at("+x"), 0.3, 0.09, 115),
           lambda o: bumps(o, 0.6, 0.15, 116)], "stack", details=[0])
-    case("hook_plus_weak_detail_capsule", "capsule_lo",
-         [lambda o: detail(o, (0, 0.4, 0.3), 0.3, 0.012, 117),
-          lambda o: hook(o, (0, 0.4, 0.3), (0, 0.25, 0.15), 0.7)], "stack", details=[0])
+    hook_capsule_case()
     case("three_artists_smooth_monkey", "monkey2",
          [lambda o: detail(o, near(o, (0, -0.8, 0.4))[0], 0.25, 0.04, 118),
           lambda o: pinch(o, near(o, (0.35, -0.75, 0.45))[0], 0.2, 0.6),
@@ -987,9 +1005,7 @@ elif which == "probe10":
     case("cast_plus_detail_axe", "axe",
          [lambda o: detail(o, at("+x"), 0.25, 0.04, 150),
           lambda o: cast(o, 0.4)], "stack", details=[0])
-    case("bend_plus_detail_axe_shipped", "axe_shipped",
-         [lambda o: detail_along(o, at("+z"), 0.25, 0.04, 151, 'Y'),
-          lambda o: bend(o, math.radians(60), 'Y')], "stack", details=[0])
+    bend_axe_shipped_case()
     case("twist_plus_pinch_letters", "letters",
          [lambda o: pinch(o, at("+z"), 0.15, 0.6),
           lambda o: twist(o, math.radians(90), 'X')], "stack", details=[0])
