@@ -762,10 +762,12 @@ struct Merger::Workspace {
   std::vector<CarryingScratch> carrying_scratch;
   detail::FoldRepairScratch fold_repair;
   detail::WorkerPool pool;
+
+  explicit Workspace(unsigned threads) : pool(threads) {}
 };
 
-Merger::Merger(const Hierarchy& hierarchy)
-    : hierarchy_(hierarchy), workspace_(std::make_unique<Workspace>()) {}
+Merger::Merger(const Hierarchy& hierarchy, unsigned threads)
+    : hierarchy_(hierarchy), workspace_(std::make_unique<Workspace>(threads)) {}
 Merger::~Merger() = default;
 
 namespace {
@@ -1112,11 +1114,9 @@ void Merger::Pass::transport_positions() {
     ws.transport_inputs[u] = {level0.values.data(), level0.bits.data(), ws.lookups[u].slot.data(),
                               ws.lookups[u].changed.words.data(), positions_of(u).values.data()};
   }
-  const detail::CarryingFields carriers = [&](std::span<const bool> carries,
-                                               std::span<const std::uint8_t> reads_level,
-                                               const std::function<void()>& beside) {
-    carrying_fields(carries, reads_level, beside);
-  };
+  const detail::CarryingFields carriers =
+      [&](std::span<const bool> carries, std::span<const std::uint8_t> reads_level,
+          const std::function<void()>& beside) { carrying_fields(carries, reads_level, beside); };
   detail::transport_positions(
       hierarchy.topology(), base.positions, changed_union, ws.transport_inputs, t.same_once,
       t.hedge ? jacobian_samples() : detail::JacobianSamples{}, ws.transport, ws.pool, kBlendGrain,

@@ -94,7 +94,9 @@ enum class SameChange {
 class Merger {
  public:
   /// `hierarchy` must outlive the Merger and describe the base mesh's connectivity.
-  explicit Merger(const Hierarchy& hierarchy);
+  /// `threads`: the size of its worker pool, the calling thread included; 0 = the machine's
+  /// hardware threads (at most 8). Results are the same bits for every count.
+  explicit Merger(const Hierarchy& hierarchy, unsigned threads = 0);
   ~Merger();
   Merger(const Merger&) = delete;
   Merger& operator=(const Merger&) = delete;
@@ -103,7 +105,7 @@ class Merger {
   /// touches keep their exact base values; the merged diff lists only changed values.
   /// Throws InvalidInput if a diff does not fit the base, for more than max_merge_diffs diffs, or
   /// if the base's triangles are not the hierarchy's (a sampled check: count, ends, 1024 samples).
-  /// The work runs on a pool of the machine's hardware threads owned by this Merger.
+  /// The work runs on the worker pool owned by this Merger.
   Diff merge(const Mesh& base, std::span<const Diff> diffs, MergeMethod method,
              const MergeFrame& frame);
   /// The same, for diffs held elsewhere (no copy): each pointer must be non-null.

@@ -1,9 +1,9 @@
-// The blend kernel runs as SSE2 (4 nodes per register) or AVX2 (8 nodes), chosen at run
-// time by the CPU. Peers on different CPUs must merge to the same bits, so both widths must
-// give bit-identical merges: asserted here on real meshes (assimp's Spider STL, 18
-// components; the Blender cases' Suzanne) and the built-in sphere, 2 to 4 users, every
-// method, with materials on the sphere (channels merge outside the kernel, and must
-// stay identical too).
+// Peers on different machines must merge to the same bits. Two things differ between
+// machines: the blend kernel's width, SSE2 (4 nodes per register) or AVX2 (8 nodes), chosen at
+// run time by the CPU, and the number of threads a Merger's pool runs. Both must give
+// bit-identical merges: asserted here on real meshes (assimp's Spider STL, 18 components; the
+// Blender cases' Suzanne) and the built-in sphere, 2 to 4 users, every method, with materials
+// on the sphere (channels merge outside the kernel, and must stay identical too).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -49,6 +49,28 @@ std::vector<std::pair<std::string, Mesh>> subjects() {
   return out;
 }
 
+/// Each of `users` artists' scripted strokes on `base`, as diffs.
+std::vector<Diff> user_diffs(const Mesh& base, const Hierarchy& hierarchy, std::uint32_t users) {
+  const bool paint = base.find_channel("albedo") >= 0;
+  std::vector<Diff> diffs;
+  for (std::uint32_t u = 0; u < users; ++u) {
+    Mesh edit = base;
+    for (const Stroke& s : scripted_strokes(base, 7000 + 31 * u + users, 6, paint))
+      apply_stroke(edit, s, &hierarchy.topology());
+    diffs.push_back(capture_diff(base, edit));
+  }
+  return diffs;
+}
+
+/// Asserts two merges are the same bits, positions and every channel.
+void expect_same_bits(const Diff& a, const Diff& b, const std::string& what) {
+  ASSERT_TRUE(same_bits(a.positions, b.positions)) << what;
+  ASSERT_EQ(a.channels.size(), b.channels.size()) << what;
+  for (std::size_t c = 0; c < a.channels.size(); ++c)
+    ASSERT_TRUE(same_bits(a.channels[c].change, b.channels[c].change))
+        << what << ", channel " << a.channels[c].desc.name;
+}
+
 TEST(SimdDispatch, Avx2AndSse2KernelsMergeToTheSameBits) {
   detail::set_simd_baseline_only(false);
   // compared only where the AVX2 kernel is what merges use
@@ -58,16 +80,8 @@ TEST(SimdDispatch, Avx2AndSse2KernelsMergeToTheSameBits) {
   std::size_t compared = 0, moved = 0;
   for (const auto& [name, base] : subjects()) {
     const Hierarchy hierarchy = Hierarchy::build(base);
-    const bool paint = base.find_channel("albedo") >= 0;
     for (std::uint32_t users = 2; users <= 4; ++users) {
-      std::vector<Diff> diffs;
-      for (std::uint32_t u = 0; u < users; ++u) {
-        Mesh edit = base;
-        const Topology& topology = hierarchy.topology();
-        for (const Stroke& s : scripted_strokes(base, 7000 + 31 * u + users, 6, paint))
-          apply_stroke(edit, s, &topology);
-        diffs.push_back(capture_diff(base, edit));
-      }
+      const std::vector<Diff> diffs = user_diffs(base, hierarchy, users);
       for (MergeMethod method : all_merge_methods()) {
         Merger merger(hierarchy);
         const Diff wide = merger.merge(base, diffs, method);
@@ -77,15 +91,41 @@ TEST(SimdDispatch, Avx2AndSse2KernelsMergeToTheSameBits) {
           ASSERT_NE(detail::blend_chunk_kernel(), detail::blend_chunk_avx2());
           narrow = merger.merge(base, diffs, method);
         }
-        const std::string what =
-            name + ", " + std::to_string(users) + " users, " + std::string(to_string(method));
-        ASSERT_TRUE(same_bits(wide.positions, narrow.positions)) << what;
-        ASSERT_EQ(wide.channels.size(), narrow.channels.size()) << what;
-        for (std::size_t c = 0; c < wide.channels.size(); ++c)
-          ASSERT_TRUE(same_bits(wide.channels[c].change, narrow.channels[c].change))
-              << what << ", channel " << wide.channels[c].desc.name;
+        expect_same_bits(
+            wide, narrow,
+            name + ", " + std::to_string(users) + " users, " + std::string(to_string(method)));
+        if (HasFatalFailure()) return;
         ++compared;
         moved += wide.positions.size();
+      }
+    }
+  }
+  EXPECT_GE(compared, 3u * 8u);
+  EXPECT_GT(moved, 0u);  // the merges did move vertices: the comparison is not vacuous
+}
+
+// The pool's chunks are fixed by the work, not by the threads, and each writes its own
+// outputs: so one thread, two, three and eight (more than this machine's cores) must give the
+// same bits.
+TEST(MergeThreads, OneTwoThreeAndEightThreadsMergeToTheSameBits) {
+  std::size_t compared = 0, moved = 0;
+  for (const auto& [name, base] : subjects()) {
+    const Hierarchy hierarchy = Hierarchy::build(base);
+    for (std::uint32_t users = 2; users <= 4; ++users) {
+      const std::vector<Diff> diffs = user_diffs(base, hierarchy, users);
+      for (MergeMethod method : all_merge_methods()) {
+        Merger alone(hierarchy, 1);
+        const Diff reference = alone.merge(base, diffs, method);
+        for (unsigned threads : {2u, 3u, 8u}) {
+          Merger merger(hierarchy, threads);
+          expect_same_bits(merger.merge(base, diffs, method), reference,
+                           name + ", " + std::to_string(users) + " users, " +
+                               std::string(to_string(method)) + ", " + std::to_string(threads) +
+                               " threads");
+          if (HasFatalFailure()) return;
+        }
+        ++compared;
+        moved += reference.positions.size();
       }
     }
   }
