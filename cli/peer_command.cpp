@@ -406,6 +406,7 @@ void print_summary(const peer::Session& session, const Mesh& local, std::uint32_
       .num("merges", st.merges)
       .num("merged_strokes", st.merged_strokes)
       .num("conflicting_strokes", st.conflicting_strokes)
+      .num("folds_introduced", st.folds_introduced)
       .real("merge_ms_max", st.merge_ms_max)
       .real("merge_ms_mean", st.merges ? st.merge_ms_sum / double(st.merges) : 0.0)
       .num("version_bytes_sent", st.version_bytes_sent)

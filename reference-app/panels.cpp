@@ -200,6 +200,10 @@ void App::draw_session_panel() {
                 static_cast<unsigned long long>(stats.strokes_acknowledged));
     ImGui::Text("sent %.1f KB  merges %llu (%.1f ms)", double(stats.submit_bytes) / 1024.0,
                 static_cast<unsigned long long>(stats.merges), stats.merge_ms_mean);
+    // Creases this peer's merges made that no artist did: the merge's one visible failure.
+    if (stats.merges > 0)
+      ImGui::Text("faces my merges turned over: %llu",
+                  static_cast<unsigned long long>(stats.folds_introduced));
     for (const SessionLink::Peer& peer : session_.peers()) draw_peer(peer);
     bool attribution = attribution_view_;
     if (ImGui::Checkbox("Attribution view (A)", &attribution)) toggle_attribution_view();

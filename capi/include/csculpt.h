@@ -56,11 +56,11 @@ extern "C" {
 /* ---- Version ------------------------------------------------------------------------------ */
 
 #define CSC_VERSION_MAJOR 0
-#define CSC_VERSION_MINOR 4
+#define CSC_VERSION_MINOR 5
 #define CSC_VERSION_PATCH 0
 /** MAJOR * 10000 + MINOR * 100 + PATCH, as csc_version() returns it. */
 #define CSC_VERSION_NUMBER (CSC_VERSION_MAJOR * 10000 + CSC_VERSION_MINOR * 100 + CSC_VERSION_PATCH)
-#define CSC_VERSION_STRING "0.4.0"
+#define CSC_VERSION_STRING "0.5.0"
 
 /** The version of the library actually loaded (compare with CSC_VERSION_NUMBER: a host built
  *  against MAJOR.MINOR runs with any library of the same MAJOR and a MINOR at least as high).
@@ -643,9 +643,12 @@ typedef struct csc_session_stats {
   uint64_t messages_dropped; /**< malformed, hostile, another session's */
   uint64_t stale_ignored;    /**< of a stale epoch or not from the merger */
   uint64_t auth_rejected;    /**< connections without the session key */
+  /** As the merger: faces its merges turned over (normal past 90 degrees from the merge's base)
+   *  that none of the merged submits turned: creases no artist made. Since 0.5. */
+  uint64_t folds_introduced;
 } csc_session_stats;
 #define CSC_SESSION_STATS_INIT \
-  { sizeof(csc_session_stats), 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.0, 0.0, 0, 0, 0, 0 }
+  { sizeof(csc_session_stats), 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.0, 0.0, 0, 0, 0, 0, 0 }
 
 CSC_API csc_status csc_session_get_stats(const csc_session* session, csc_session_stats* out);
 

@@ -62,7 +62,7 @@ __all__ = [
 
 # The header version this module was written against: it runs with a library of the same
 # major and a minor at least this high (the ABI only grows within a major).
-EXPECTED_VERSION = (0, 4)
+EXPECTED_VERSION = (0, 5)
 
 # ---- Enums (32-bit in C) -------------------------------------------------------------------
 
@@ -250,7 +250,8 @@ class csc_session_stats(_Sized):
                 ("merged_strokes", c_uint64), ("conflicting_strokes", c_uint64),
                 ("merge_ms_mean", c_double), ("merge_ms_max", c_double),
                 ("messages_received", c_uint64), ("messages_dropped", c_uint64),
-                ("stale_ignored", c_uint64), ("auth_rejected", c_uint64)]
+                ("stale_ignored", c_uint64), ("auth_rejected", c_uint64),
+                ("folds_introduced", c_uint64)]
 
 
 class csc_presence(_Sized):
@@ -1258,6 +1259,7 @@ class SessionStats:
     messages_dropped: int
     stale_ignored: int
     auth_rejected: int
+    folds_introduced: int
 
 
 @dataclasses.dataclass(frozen=True)

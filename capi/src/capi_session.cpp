@@ -319,6 +319,7 @@ CSC_API csc_status csc_session_get_stats(const csc_session* session, csc_session
     v.messages_dropped = s.messages_dropped;
     v.stale_ignored = s.stale_ignored;
     v.auth_rejected = s.auth_rejected;
+    v.folds_introduced = s.folds_introduced;
     write_out(out, v, "out");
   });
 }

@@ -123,6 +123,9 @@ TEST(CapiSession, TwoHostsEditTheirArraysAndConverge) {
   }
   EXPECT_TRUE(joined_event);
   EXPECT_TRUE(version_event);
+  csc_session_stats merged = CSC_SESSION_STATS_INIT;
+  ASSERT_EQ(csc_session_get_stats(a, &merged), CSC_OK);
+  EXPECT_EQ(merged.folds_introduced, 0u);  // a lift and a paint: nothing turned over
   // both edits arrived on both hosts
   float lift = 0, red = 0;
   for (std::size_t v = 0; v < ha.positions.size() / 3; ++v) {
@@ -141,6 +144,38 @@ TEST(CapiSession, TwoHostsEditTheirArraysAndConverge) {
   csc_session_destroy(b);
   csc_session_destroy(a);
   csc_mesh_destroy(b_base);
+  csc_mesh_destroy(mesh);
+}
+
+// csc_session_stats grew folds_introduced in 0.5: a host built against 0.4 passes the older
+// size and gets every field it knows, the new one left as it set it; a 0.5 host gets it written.
+TEST(CapiSession, StatsGrewFoldsIntroducedAndOlderHostsStillReadTheirs) {
+  csc_mesh* mesh = grid(8);
+  const csc_session_options o = fast(1);
+  csc_session* s = nullptr;
+  ASSERT_EQ(csc_session_create(&s, mesh, &o), CSC_OK) << csc_last_error();
+  constexpr std::uint64_t kUntouched = 0xC5C5C5C5C5C5C5C5ull;
+
+  csc_session_stats now = CSC_SESSION_STATS_INIT;
+  now.folds_introduced = kUntouched;
+  ASSERT_EQ(csc_session_get_stats(s, &now), CSC_OK) << csc_last_error();
+  EXPECT_EQ(now.folds_introduced, 0u);  // written: no merge yet
+  EXPECT_EQ(now.struct_size, sizeof(csc_session_stats));
+
+  csc_session_stats older = CSC_SESSION_STATS_INIT;
+  older.struct_size = offsetof(csc_session_stats, folds_introduced);  // a 0.4 host's
+  older.folds_introduced = kUntouched;
+  ASSERT_EQ(csc_session_get_stats(s, &older), CSC_OK) << csc_last_error();
+  EXPECT_EQ(older.folds_introduced, kUntouched);
+  EXPECT_EQ(older.members, now.members);
+  EXPECT_EQ(older.struct_size, offsetof(csc_session_stats, folds_introduced));
+
+  csc_session_stats short_ = CSC_SESSION_STATS_INIT;
+  short_.struct_size = offsetof(csc_session_stats, auth_rejected);  // no version had this
+  EXPECT_EQ(csc_session_get_stats(s, &short_), CSC_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(std::string(csc_last_error()).find("struct_size"), std::string::npos)
+      << csc_last_error();
+  csc_session_destroy(s);
   csc_mesh_destroy(mesh);
 }
 

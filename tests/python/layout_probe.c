@@ -175,6 +175,7 @@ int main(void) {
   FIELD(csc_session_stats, messages_dropped);
   FIELD(csc_session_stats, stale_ignored);
   FIELD(csc_session_stats, auth_rejected);
+  FIELD(csc_session_stats, folds_introduced);
   INIT(csc_session_stats, CSC_SESSION_STATS_INIT, struct_size);
   INIT(csc_session_stats, CSC_SESSION_STATS_INIT, members);
   INIT(csc_session_stats, CSC_SESSION_STATS_INIT, merge_ms_mean);

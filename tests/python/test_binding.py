@@ -229,7 +229,7 @@ class Version(unittest.TestCase):
 
     def test_importing_with_a_higher_expected_minor_raises_import_error(self):
         lib = csculpt.version()
-        patched = self.source.replace("EXPECTED_VERSION = (0, 4)",
+        patched = self.source.replace("EXPECTED_VERSION = (0, 5)",
                                       f"EXPECTED_VERSION = ({lib[0]}, {lib[1] + 1})")
         self.assertNotEqual(patched, self.source, "EXPECTED_VERSION line not found")
         with tempfile.TemporaryDirectory() as tmp, self.assertRaises(ImportError) as ctx:
