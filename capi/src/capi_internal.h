@@ -155,8 +155,8 @@ inline constexpr std::size_t first_published_size<csc_session_options> =
     offsetof(csc_session_options, journal_dir);
 /// csc_session_stats grew folds_introduced in 0.5.
 template <>
-inline constexpr std::size_t first_published_size<csc_session_stats> =
-    offsetof(csc_session_stats, folds_introduced);
+inline constexpr std::size_t first_published_size<csc_session_stats> = offsetof(csc_session_stats,
+                                                                                folds_introduced);
 
 void require_struct_size(std::uint32_t declared, std::size_t minimum, const char* name);
 
