@@ -71,66 +71,62 @@ void expect_same_bits(const Diff& a, const Diff& b, const std::string& what) {
         << what << ", channel " << a.channels[c].desc.name;
 }
 
-TEST(SimdDispatch, Avx2AndSse2KernelsMergeToTheSameBits) {
-  detail::set_simd_baseline_only(false);
-  // compared only where the AVX2 kernel is what merges use
-  if (detail::blend_chunk_avx2() == nullptr ||
-      detail::blend_chunk_kernel() != detail::blend_chunk_avx2())
-    GTEST_SKIP() << "the AVX2 kernel is not built or this CPU lacks AVX2 (or CSCULPT_SIMD=sse2)";
+/// Runs `compare(hierarchy, base, diffs, method, what)` for every subject, 2 to 4
+/// users and every method; `compare` returns the reference merge it compared against. Asserts
+/// the comparisons were made and moved vertices, so they are not vacuous.
+template <class Compare>
+void for_every_merge(Compare compare) {
   std::size_t compared = 0, moved = 0;
   for (const auto& [name, base] : subjects()) {
     const Hierarchy hierarchy = Hierarchy::build(base);
     for (std::uint32_t users = 2; users <= 4; ++users) {
       const std::vector<Diff> diffs = user_diffs(base, hierarchy, users);
       for (MergeMethod method : all_merge_methods()) {
-        Merger merger(hierarchy);
-        const Diff wide = merger.merge(base, diffs, method);
-        Diff narrow;
-        {
-          BaselineOnly baseline;
-          ASSERT_NE(detail::blend_chunk_kernel(), detail::blend_chunk_avx2());
-          narrow = merger.merge(base, diffs, method);
-        }
-        expect_same_bits(
-            wide, narrow,
-            name + ", " + std::to_string(users) + " users, " + std::string(to_string(method)));
-        if (HasFatalFailure()) return;
-        ++compared;
-        moved += wide.positions.size();
-      }
-    }
-  }
-  EXPECT_GE(compared, 3u * 8u);
-  EXPECT_GT(moved, 0u);  // the merges did move vertices: the comparison is not vacuous
-}
-
-// The pool's chunks are fixed by the work, not by the threads, and each writes its own
-// outputs: so one thread, two, three and eight (more than this machine's cores) must give the
-// same bits.
-TEST(MergeThreads, OneTwoThreeAndEightThreadsMergeToTheSameBits) {
-  std::size_t compared = 0, moved = 0;
-  for (const auto& [name, base] : subjects()) {
-    const Hierarchy hierarchy = Hierarchy::build(base);
-    for (std::uint32_t users = 2; users <= 4; ++users) {
-      const std::vector<Diff> diffs = user_diffs(base, hierarchy, users);
-      for (MergeMethod method : all_merge_methods()) {
-        Merger alone(hierarchy, 1);
-        const Diff reference = alone.merge(base, diffs, method);
-        for (unsigned threads : {2u, 3u, 8u}) {
-          Merger merger(hierarchy, threads);
-          expect_same_bits(merger.merge(base, diffs, method), reference,
-                           name + ", " + std::to_string(users) + " users, " +
-                               std::string(to_string(method)) + ", " + std::to_string(threads) +
-                               " threads");
-          if (HasFatalFailure()) return;
-        }
+        const std::string what =
+            name + ", " + std::to_string(users) + " users, " + std::string(to_string(method));
+        const Diff reference = compare(hierarchy, base, diffs, method, what);
+        if (::testing::Test::HasFatalFailure()) return;
         ++compared;
         moved += reference.positions.size();
       }
     }
   }
   EXPECT_GE(compared, 3u * 8u);
-  EXPECT_GT(moved, 0u);  // the merges did move vertices: the comparison is not vacuous
+  EXPECT_GT(moved, 0u);
+}
+
+TEST(SimdDispatch, Avx2AndSse2KernelsMergeToTheSameBits) {
+  detail::set_simd_baseline_only(false);
+  // compared only where the AVX2 kernel is what merges use
+  if (detail::blend_chunk_avx2() == nullptr ||
+      detail::blend_chunk_kernel() != detail::blend_chunk_avx2())
+    GTEST_SKIP() << "the AVX2 kernel is not built or this CPU lacks AVX2 (or CSCULPT_SIMD=sse2)";
+  for_every_merge([](const Hierarchy& hierarchy, const Mesh& base, const std::vector<Diff>& diffs,
+                     MergeMethod method, const std::string& what) {
+    Merger merger(hierarchy);
+    const Diff wide = merger.merge(base, diffs, method);
+    BaselineOnly baseline;
+    EXPECT_NE(detail::blend_chunk_kernel(), detail::blend_chunk_avx2());
+    expect_same_bits(wide, merger.merge(base, diffs, method), what);
+    return wide;
+  });
+}
+
+// The pool's chunks are fixed by the work, not by the threads, and each writes its own
+// outputs: so one thread, two, three and eight (more than this machine's cores) must give the
+// same bits.
+TEST(MergeThreads, OneTwoThreeAndEightThreadsMergeToTheSameBits) {
+  for_every_merge([](const Hierarchy& hierarchy, const Mesh& base, const std::vector<Diff>& diffs,
+                     MergeMethod method, const std::string& what) {
+    Merger alone(hierarchy, 1);
+    const Diff reference = alone.merge(base, diffs, method);
+    for (unsigned threads : {2u, 3u, 8u}) {
+      Merger merger(hierarchy, threads);
+      expect_same_bits(merger.merge(base, diffs, method), reference,
+                       what + ", " + std::to_string(threads) + " threads");
+    }
+    return reference;
+  });
 }
 
 // The face-rotation kernel directly: every count from 1 to 40 (so every tail length of
