@@ -1,5 +1,5 @@
 # Builds merge cases from edits authored by Blender's own deformers.
-# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|held4|held5|held6|house|extra|crumple|probe4|...|probe17]
+# Run: blender -b --factory-startup --python make_cases.py -- OUTDIR [public|public2|held|held2|held3|held4|held5|held6|house|extra|crumple|probe4|...|probe18]
 # (Debian 12: apt-get install blender assimp-testmodels). Add your own case() lines to author more.
 # public, public2: the sets of shared/eval/cases (this file began as shared/eval/make_cases.py);
 # held: tests/eval/cases (see its README.md), which also prints what each case holds;
@@ -588,6 +588,18 @@ def shrinkwrap_part(obj, center, radius, sphere_radius):
     bpy.context.view_layer.objects.active = obj
     m = obj.modifiers.new("shrinkwrap", 'SHRINKWRAP'); m.target = target
     m.wrap_method = 'NEAREST_SURFACEPOINT'; m.vertex_group = group(obj, "wrap", center, radius)
+    return m
+
+def laplacian(obj, center, radius, factor, repeat):
+    """a Laplacian smooth of the region within radius: it keeps volume where a Smooth shrinks"""
+    m = obj.modifiers.new("laplacian", 'LAPLACIANSMOOTH'); m.lambda_factor = factor
+    m.iterations = repeat; m.vertex_group = group(obj, "laplacian", center, radius)
+    return m
+
+def shove(obj, axis, size, strength, seed):
+    """a broad noise Displace along one axis of space, not the normals: a sideways coarse
+    shove, as a large Snake Hook or Elastic Grab pass would leave"""
+    m = bumps(obj, size, strength, seed); m.direction = axis
     return m
 
 def near(o, p):
@@ -1266,6 +1278,47 @@ elif which == "probe17b":
     case("grab_plus_swirl_c4d", "c4d",
          [lambda o: local_twist(o, *LM["+x"], 0.25, math.radians(50)),
           lambda o: grab(o, at("+x"), at("+x", 1, (0.15, 0.1, 0.1)), 0.6)], "stack", details=[0])
+elif which == "probe18":
+    # deformers no set used as the coarse edit (a Laplacian smooth, a sideways noise shove),
+    # under details, pinches and swirls, on welded and as-shipped meshes; scored by hand, not kept
+    case("laplacian_plus_detail_capsule", "capsule_lo",
+         [lambda o: detail(o, (0.4, 0, 0.5), 0.3, 0.05, 401),
+          lambda o: laplacian(o, (0.4, 0, 0.5), 0.8, 2.0, 10)], "stack", details=[0])
+    case("laplacian_plus_pinch_monkey", "monkey2",
+         [lambda o: pinch(o, near(o, (0, -0.8, 0.4))[0], 0.25, 0.6),
+          lambda o: laplacian(o, (0, -0.7, 0.3), 0.9, 1.0, 20)], "stack", details=[0])
+    case("shove_plus_detail_wuson_shipped", "wuson_shipped",
+         [lambda o: detail_along(o, at("+z"), 0.3, 0.04, 402, 'Z'),
+          lambda o: shove(o, 'X', 0.8, 0.3, 403)], "stack", details=[0])
+    case("shove_plus_swirl_torus", "torus_lo",
+         [lambda o: local_twist(o, (1.3, 0, 0), (1, 0, 0), 0.25, math.radians(60)),
+          lambda o: shove(o, 'Z', 0.7, 0.4, 404)], "stack", details=[0])
+    case("three_artists_laplacian_human", "human",
+         [lambda o: detail(o, at("+x"), 0.2, 0.03, 405),
+          lambda o: local_twist(o, *LM["+z"], 0.2, math.radians(50)),
+          lambda o: laplacian(o, (0, 0, 0), 2.0, 1.5, 10)], "stack", details=[0, 1])
+    case("disjoint_laplacian_engine_shipped", "engine_shipped",
+         [lambda o: detail_along(o, at("+y"), 0.25, 0.04, 406, 'Y'),
+          lambda o: laplacian(o, at("-y"), 0.35, 1.0, 10)], "stack", details=[0])
+    case("shove_plus_tinygrab_c4d_shipped", "c4d_shipped",
+         [lambda o: tiny_grab(o, at("+z"), (0.03, 0.02, 0), 0.25),
+          lambda o: shove(o, 'Y', 0.8, 0.3, 407)], "stack", details=[0])
+elif which == "probe18b":
+    # the three artists of probe18's Laplacian case under a plain Smooth instead, over the whole
+    # figure and over the head only, and a swirl alone under each; scored by hand, not kept
+    case("three_artists_smooth_human", "human",
+         [lambda o: detail(o, at("+x"), 0.2, 0.03, 405),
+          lambda o: local_twist(o, *LM["+z"], 0.2, math.radians(50)),
+          lambda o: smooth(o, (0, 0, 0), 2.0, 1.0, 20)], "stack", details=[0, 1])
+    case("smooth_head_plus_swirl_human", "human",
+         [lambda o: local_twist(o, *LM["+z"], 0.2, math.radians(50)),
+          lambda o: smooth(o, at("+z"), 0.5, 1.0, 20)], "stack", details=[0])
+    case("laplacian_plus_swirl_human", "human",
+         [lambda o: local_twist(o, *LM["+z"], 0.2, math.radians(50)),
+          lambda o: laplacian(o, (0, 0, 0), 2.0, 1.5, 10)], "stack", details=[0])
+    case("laplacian_plus_swirl_monkey", "monkey2",
+         [lambda o: local_twist(o, *near(o, (0, -0.8, 0.4)), 0.25, math.radians(60)),
+          lambda o: laplacian(o, (0, -0.7, 0.3), 0.9, 1.5, 10)], "stack", details=[0])
 elif which == "house":
     house_grab_case()
     case("cast_plus_detail_house", "house",
