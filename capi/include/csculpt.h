@@ -373,7 +373,7 @@ typedef enum csc_merge_method {
   CSC_MERGE_SUM = 6,                    /**< sum of the translations */
   CSC_MERGE_PAPER_BLEND = 7,            /**< the hierarchy merge with the paper's node blend */
   CSC_MERGE_HIERARCHY_BLEND = 8,        /**< the hierarchy merge, intent-counting node blend */
-  CSC_MERGE_FRAME_TRANSPORT = 9,        /**< frame transport without the stacked hedge */
+  CSC_MERGE_FRAME_TRANSPORT = 9,        /**< frame transport without the stacked hedge (0.5) */
   CSC_MERGE_METHOD_MAX_ENUM = 0x7FFFFFFF
 } csc_merge_method;
 

@@ -21,8 +21,9 @@ KNOWN_LIMITS lists the rule violations that are understood and documented in
 docs/merge-quality.md: they are printed on every run, and a known limit that no longer
 occurs is reported so the list stays true; so is a miss of the stack rule where the stacked
 ideal is sum itself and the frame ideal is not (STACK_IS_SUM), where no merge can meet both.
-KNOWN_BOUNDS holds some cases to a tighter factor of sum than the rules. Exits 0 when every other rule holds, 1 with one message per violation
-otherwise, 77 (SKIP) when a cases directory or numpy is missing.
+KNOWN_BOUNDS holds some cases to a tighter factor of sum than the rules. Exits 0 when every
+other rule holds, 1 with one message per violation otherwise, 77 (SKIP) when a cases directory
+or numpy is missing.
 """
 import os
 import re
@@ -112,14 +113,15 @@ def check(results, cases, apart=lambda case: 0.0):
             bounded(case, "frame", v, value(case + "/frame", "(sum)", "rel_err"))
             v, s = value(case, "full", "rel_err"), value(case, "(sum)", "rel_err")
             if v is not None and s is not None and not v <= STACK_FACTOR * s:
-                rule = "stack is sum" if s <= STACK_IS_SUM and apart(case) > EXACT_LIMIT else "stack"
+                gap = apart(case)
+                rule = "stack is sum" if s <= STACK_IS_SUM and gap > EXACT_LIMIT else "stack"
                 problems.append((case, rule, "stacked ideal: full %.4f > %.1f x sum %.4f; "
-                                 "the ideals are %.4f apart" % (v, STACK_FACTOR, s, apart(case))))
+                                 "the ideals are %.4f apart" % (v, STACK_FACTOR, s, gap)))
                 # Even where the rule cannot be met, full is no farther from the stack
                 # than the frame ideal is: the stacked ideal as a sanity check.
-                if not v <= apart(case):
-                    problems.append((case, "stack sanity", "stacked ideal: full %.4f is farther "
-                                     "from it than the frame ideal (%.4f)" % (v, apart(case))))
+                if not v <= gap:
+                    problems.append((case, "stack sanity", "stacked ideal: full %.4f is "
+                                     "farther from it than the frame ideal (%.4f)" % (v, gap)))
             bounded(case, "stack", v, s)
         v = value(case, "full", "roughness")
         if v is not None and not v <= ROUGHNESS_LIMIT:

@@ -1319,6 +1319,13 @@ elif which == "probe18b":
     case("laplacian_plus_swirl_monkey", "monkey2",
          [lambda o: local_twist(o, *near(o, (0, -0.8, 0.4)), 0.25, math.radians(60)),
           lambda o: laplacian(o, (0, -0.7, 0.3), 0.9, 1.5, 10)], "stack", details=[0])
+elif which == "probe18c":
+    # probe18b's swirl under Laplacian smooths of the human figure from mild to probe18's
+    # (factor 1.5 roughens this coarse figure); scored by hand, not kept
+    for factor in (0.1, 0.3, 0.6, 1.0):
+        case("laplacian%02d_plus_swirl_human" % round(10 * factor), "human",
+             [lambda o: local_twist(o, *LM["+z"], 0.2, math.radians(50)),
+              lambda o, f=factor: laplacian(o, (0, 0, 0), 2.0, f, 10)], "stack", details=[0])
 elif which == "house":
     house_grab_case()
     case("cast_plus_detail_house", "house",

@@ -36,9 +36,16 @@ def all_methods(binary):
     return [m.strip() for m in line.split(None, 2)[2].split(",")]  # "--method TEXT=full  a, b"
 
 
+def median(values):
+    """The median of the values that exist ("–" when none does)."""
+    present = [v for v in values if v is not None]
+    return "%.3f" % statistics.median(present) if present else "–"
+
+
 def methods_table(scorer, binary, dirs):
     # The CLI's sum, weighted-translation and average are the scorer's own baselines.
-    methods = [m for m in all_methods(binary) if m not in ("sum", "weighted-translation", "average")]
+    skip = ("sum", "weighted-translation", "average")
+    methods = [m for m in all_methods(binary) if m not in skip]
     results, cases = {}, []
     for d in dirs:
         run = subprocess.run([sys.executable, scorer, d, binary] + methods,
@@ -48,25 +55,29 @@ def methods_table(scorer, binary, dirs):
     exact = [c for c in cases if "disjoint" in c or "identical" in c]
     meet = [c for c in cases if c not in exact and c + "/frame" in results]
     value = lambda row, m, k: results.get(row, {}).get(m, {}).get(k)
+    # A method without a result on a case misses that case's rule.
+    below = lambda x, *bounds: x is not None and all(b is not None and x < b for b in bounds)
     print("| method | frame: median rel_err | frame: below sum and w-t (of %d) | stack: median "
           "rel_err | stack: within 1.5x sum (of %d) | disjoint, identical: within 0.01 (of %d) "
-          "| new folds: all | cases with more than sum (of %d) |" % (len(meet), len(meet),
-                                                                   len(exact), len(cases)))
+          "| new folds: all | cases with more than sum (of %d) |"
+          % (len(meet), len(meet), len(exact), len(cases)))
     print("|---" * 8 + "|")
     for m in methods + ["(sum)", "(weighted-translation)", "(average)"]:
         fr = [value(c + "/frame", m, "rel_err") for c in meet]
         st = [value(c, m, "rel_err") for c in meet]
-        below = sum(f < value(c + "/frame", "(sum)", "rel_err") and
-                    f < value(c + "/frame", "(weighted-translation)", "rel_err")
-                    for c, f in zip(meet, fr))
-        within = sum(v <= 1.5 * value(c, "(sum)", "rel_err") for c, v in zip(meet, st))
-        whole = sum(all(value(r, m, "rel_err") <= 0.01 for r in (c, c + "/frame")
-                        if value(r, m, "rel_err") is not None) for c in exact)
+        frame_ok = sum(below(f, value(c + "/frame", "(sum)", "rel_err"),
+                             value(c + "/frame", "(weighted-translation)", "rel_err"))
+                       for c, f in zip(meet, fr))
+        stack_ok = sum(below(v, 1.5 * value(c, "(sum)", "rel_err") + 1e-12)
+                       for c, v in zip(meet, st))
+        whole = sum(value(c, m, "rel_err") is not None and
+                    all(below(value(r, m, "rel_err"), 0.01 + 1e-12) for r in (c, c + "/frame")
+                        if value(r, "(sum)", "rel_err") is not None) for c in exact)
         folds = [value(c + "/folds", m, "new_folds") for c in cases]
-        more = sum(f > value(c + "/folds", "(sum)", "new_folds")
-                   for c, f in zip(cases, folds) if f is not None)
-        print("| %s | %.3f | %d | %.3f | %d | %d | %d | %d |" % (
-            m.strip("()"), statistics.median(fr), below, statistics.median(st), within, whole,
+        sums = [value(c + "/folds", "(sum)", "new_folds") for c in cases]
+        more = sum(f is None or f > s for f, s in zip(folds, sums) if s is not None)
+        print("| %s | %s | %d | %s | %d | %d | %d | %d |" % (
+            m.strip("()"), median(fr), frame_ok, median(st), stack_ok, whole,
             sum(f for f in folds if f is not None), more))
 
 

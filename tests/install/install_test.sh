@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Installs the built libcsculpt into a fresh prefix and builds hosts against that prefix alone:
-# a CMake project (find_package(csculpt 0.4) -> csculpt::csculpt), a plain cc build through
+# a CMake project (find_package(csculpt 0.5) -> csculpt::csculpt), a plain cc build through
 # pkg-config, and the example of docs/c-api.md (also through pkg-config). Also checks what the install tree holds (only the public header; the
 # library with its SONAME; no path back into the build tree).
 #

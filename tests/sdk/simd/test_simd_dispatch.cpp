@@ -113,8 +113,8 @@ TEST(SimdDispatch, Avx2AndSse2KernelsMergeToTheSameBits) {
 }
 
 // The pool's chunks are fixed by the work, not by the threads, and each writes its own
-// outputs: so one thread, two, three and eight (more than this machine's cores) must give the
-// same bits.
+// outputs: so one thread, two, three and eight (more threads than a small machine has cores)
+// must give the same bits.
 TEST(MergeThreads, OneTwoThreeAndEightThreadsMergeToTheSameBits) {
   for_every_merge([](const Hierarchy& hierarchy, const Mesh& base, const std::vector<Diff>& diffs,
                      MergeMethod method, const std::string& what) {
