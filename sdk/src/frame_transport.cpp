@@ -108,6 +108,7 @@ class Transport {
   void share_normals();
   void share_agreements();
   /// The carrying energies of the chunk's vertices, and each one's carrying levels.
+  void count_moved();
   void chunk_energy(std::size_t begin, std::size_t end, double* energy);
   void finish_weights(std::size_t chunks);
   bool smooths(std::size_t i, std::size_t moved) const;
@@ -162,6 +163,7 @@ class Transport {
   /// Per diff: its column of face_turns, or kNotCached; carriers_ columns in all.
   std::array<std::uint8_t, kMaxUsers> cached_{};
   std::size_t carriers_ = 0;
+  std::array<std::size_t, kMaxUsers> moved_{};  ///< per diff: the listed vertices it moves
   void fit_grabs(std::span<const bool> carries);
   double same(const VertexState& s, std::size_t i, std::size_t j) const;
 };
@@ -545,8 +547,24 @@ bool Transport::may_carry_by_bits(std::size_t at) const {
   return carries_between(movers, turners, both);
 }
 
+void Transport::count_moved() {
+  for (std::size_t i = 0; i < n_; ++i) moved_[i] = moved_count(i);
+}
+
+/// How much of diff i's ring stretching counts against it carrying diff j: all of it where j
+/// moves at least as many vertices as i, else the share j's reach is of i's. A pinch stretches
+/// the rings of its own small support, which marks it as the finer edit; a smoothing of a
+/// whole figure stretches rings all over its reach, and counted whole under a swirl a quarter
+/// its size, that stretching would make the smoothing the finer edit and the swirl its frame.
+double stretch_reach(std::size_t moved_i, std::size_t moved_j) {
+  return moved_j >= moved_i ? 1.0 : static_cast<double>(moved_j) / static_cast<double>(moved_i);
+}
+
 void Transport::chunk_energy(std::size_t begin, std::size_t end, double* energy) {
   std::fill(energy, energy + n_ * n_, 0.0);
+  std::array<double, kMaxUsers * kMaxUsers> reach;
+  for (std::size_t i = 0; i < n_; ++i)
+    for (std::size_t j = 0; j < n_; ++j) reach[i * n_ + j] = stretch_reach(moved_[i], moved_[j]);
   VertexState s;
   for (std::size_t at = begin; at < end; ++at) {
     scratch_.carried_here[at] = 0;
@@ -568,8 +586,8 @@ void Transport::chunk_energy(std::size_t begin, std::size_t end, double* energy)
       if (!s.turns[i] && !s.moves[i]) continue;
       for (std::size_t j = 0; j < n_; ++j)
         if (j != i && s.moves[j])
-          energy[i * n_ + j] +=
-              norm2(rotation_change(s.rotation[i], s.d[j])) + k[i] * norm2(s.d[j]);
+          energy[i * n_ + j] += norm2(rotation_change(s.rotation[i], s.d[j])) +
+                                reach[i * n_ + j] * k[i] * norm2(s.d[j]);
     }
   }
 }
@@ -665,9 +683,7 @@ bool Transport::smooths(std::size_t i, std::size_t moved) const {
 /// Where one edit lies inside a much wider one, or inside a smoothing, the outer one carries it
 /// (w = 1, and 0 back), whatever the energies say: see kNestedRatio and kSmoothingRatio.
 void Transport::carry_inside() {
-  std::array<std::size_t, kMaxUsers> moved{};
-  for (std::size_t i = 0; i < n_; ++i) moved[i] = moved_count(i);
-  const std::span<const std::size_t> counts(moved.data(), n_);
+  const std::span<const std::size_t> counts(moved_.data(), n_);
   carry_nested(counts);
   carry_inside_smoothings(counts);
 }
@@ -930,6 +946,7 @@ void transport_positions(const Topology& topology, std::span<const Vec3f> base,
   const ScratchReset reset{scratch, vertices};
   Transport t(topology, base, vertices, users, same_once, scratch);
   t.find_seams();
+  t.count_moved();
   t.share_normals();
   t.share_agreements();
   const std::size_t n = users.size();
