@@ -107,8 +107,9 @@ class Transport {
   void find_seams();
   void share_normals();
   void share_agreements();
-  /// The carrying energies of the chunk's vertices, and each one's carrying levels.
+  /// moved_: how many listed vertices each diff moves.
   void count_moved();
+  /// The carrying energies of the chunk's vertices, and each one's carrying levels.
   void chunk_energy(std::size_t begin, std::size_t end, double* energy);
   void finish_weights(std::size_t chunks);
   bool smooths(std::size_t i, std::size_t moved) const;

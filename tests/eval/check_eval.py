@@ -54,6 +54,17 @@ KNOWN_LIMITS = {}
 KNOWN_BOUNDS = {}
 
 
+def case_names(cases_dir):
+    """The case directories of cases_dir (those holding a base.ply), sorted."""
+    return sorted(c for c in os.listdir(cases_dir)
+                  if os.path.isfile(os.path.join(cases_dir, c, "base.ply")))
+
+
+def exact_case(case):
+    """Disjoint and identical cases: their edits must come back whole."""
+    return "disjoint" in case or "identical" in case
+
+
 def parse(table):
     """{case: {method: {kind: value}}}; kind "error" holds a message."""
     results = {}
@@ -95,7 +106,7 @@ def check(results, cases, apart=lambda case: 0.0):
             err = value(case, method, "error")
             if err is not None or method not in results.get(case, {}):
                 problems.append((case, "result", "%s gave no result: %s" % (method, err)))
-        exact = "disjoint" in case or "identical" in case
+        exact = exact_case(case)
         rows = [case, case + "/frame"]
         if exact:
             for row in rows:
@@ -135,7 +146,7 @@ def check(results, cases, apart=lambda case: 0.0):
 def check_artists(binary, cases_dir, case):
     """Rule violations of the per-artist scores of one case, as (case, rule, message)."""
     problems = []
-    exact = "disjoint" in case or "identical" in case
+    exact = exact_case(case)
     for ideal, artist, e in artists.score_case(binary, os.path.join(cases_dir, case)):
         where = "artist %s against %s" % (artist, ideal)
         if exact and not e["full"] <= EXACT_LIMIT:
@@ -171,7 +182,7 @@ def main():
         return SKIP
     problems, cases = [], []
     for d in dirs:
-        here = sorted(c for c in os.listdir(d) if os.path.isfile(os.path.join(d, c, "base.ply")))
+        here = case_names(d)
         table = score(scorer, binary, d)
         if table is None:
             print("FAIL: the scorer failed on %s" % d)

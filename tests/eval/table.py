@@ -51,8 +51,8 @@ def methods_table(scorer, binary, dirs):
         run = subprocess.run([sys.executable, scorer, d, binary] + methods,
                              capture_output=True, text=True, check=True)
         results.update(check_eval.parse(run.stdout))
-        cases += sorted(c for c in os.listdir(d) if os.path.isfile(os.path.join(d, c, "base.ply")))
-    exact = [c for c in cases if "disjoint" in c or "identical" in c]
+        cases += check_eval.case_names(d)
+    exact = [c for c in cases if check_eval.exact_case(c)]
     meet = [c for c in cases if c not in exact and c + "/frame" in results]
     value = lambda row, m, k: results.get(row, {}).get(m, {}).get(k)
     # A method without a result on a case misses that case's rule.
@@ -89,7 +89,7 @@ def main():
     for d in dirs:
         table = check_eval.score(scorer, binary, d, echo=False)
         results.update(check_eval.parse(table))
-        cases += sorted(c for c in os.listdir(d) if os.path.isfile(os.path.join(d, c, "base.ply")))
+        cases += check_eval.case_names(d)
     names = [c.strip("()") for c in COLUMNS]
     print("| case | " + " | ".join(n + " (frame)" for n in names) + " | " +
           " | ".join(n + " (stack)" for n in names[:STACKED]) + " | new folds: " +
