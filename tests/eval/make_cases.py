@@ -597,6 +597,14 @@ def laplacian(obj, center, radius, factor, repeat):
     m.iterations = repeat; m.vertex_group = group(obj, "laplacian", center, radius)
     return m
 
+def corrective(obj, center, radius, factor, repeat):
+    """a Corrective Smooth that only smooths (no rest-shape correction), lengths weighted: it
+    relaxes the surface without the shrinking of a plain Smooth's uniform weights"""
+    m = obj.modifiers.new("corrective", 'CORRECTIVE_SMOOTH'); m.factor = factor
+    m.iterations = repeat; m.use_only_smooth = True; m.smooth_type = 'LENGTH_WEIGHTED'
+    m.vertex_group = group(obj, "corrective", center, radius)
+    return m
+
 def shove(obj, axis, size, strength, seed):
     """a broad noise Displace along one axis of space, not the normals: a sideways coarse
     shove, as a large Snake Hook or Elastic Grab pass would leave"""
@@ -813,6 +821,72 @@ elif which == "held7":
     # (docs/merge-quality.md, "A smoothing's spikes")
     laplacian_swirl_case(0.1)
     laplacian_swirl_case(1.0)
+elif which == "probe19":
+    # smoothings on meshes and under edits no set paired them with: Laplacian smooths (which
+    # keep volume) on the many-part mocap figure, the duck, the shipped scan and the shipped
+    # Suzanne, one strong and short enough to spike; a Corrective Smooth (lengths weighted)
+    # on Suzanne and the figure; scored by hand, not kept
+    case("laplacian_plus_swirl_mocap", "mocap",
+         [lambda o: local_twist(o, *LM["+z"], 0.2, math.radians(50)),
+          lambda o: laplacian(o, (0, 0, 0), 2.0, 0.3, 10)], "stack", details=[0])
+    case("laplacian_plus_pinch_wuson_shipped", "wuson_shipped",
+         [lambda o: pinch(o, at("+y"), 0.25, 0.6),
+          lambda o: laplacian(o, at("+y"), 0.7, 0.5, 10)], "stack", details=[0])
+    case("laplacian_plus_tinygrab_duck", "duck",
+         [lambda o: tiny_grab(o, at("+z"), (0.02, 0.02, 0.0), 0.2),
+          lambda o: laplacian(o, (0, 0, 0), 2.0, 0.2, 10)], "stack", details=[0])
+    case("spiky_laplacian_plus_detail_torus", "torus_lo",
+         [lambda o: detail(o, (1.3, 0, 0), 0.3, 0.05, 410),
+          lambda o: laplacian(o, (1.3, 0, 0), 0.8, 5.0, 1)], "stack", details=[0])
+    case("corrective_plus_detail_monkey", "monkey2",
+         [lambda o: detail(o, near(o, (0, -0.8, 0.4))[0], 0.3, 0.05, 411),
+          lambda o: corrective(o, (0, -0.7, 0.3), 0.9, 1.0, 20)], "stack", details=[0])
+    case("corrective_plus_swirl_human", "human",
+         [lambda o: local_twist(o, *LM["+z"], 0.2, math.radians(50)),
+          lambda o: corrective(o, (0, 0, 0), 2.0, 0.5, 10)], "stack", details=[0])
+    case("three_artists_laplacian_suzanne_shipped", "suzanne_shipped",
+         [lambda o: detail_along(o, at("-y"), 0.3, 0.04, 412, 'Y'),
+          lambda o: pinch(o, at("+z"), 0.25, 0.6),
+          lambda o: laplacian(o, (0, 0, 0), 2.0, 0.5, 10)], "stack", details=[0, 1])
+elif which == "probe20":
+    # pairings drawn at random (fixed seed) from the meshes, details and coarse edits the sets
+    # use, so that no one chose them: scored by hand, not kept
+    import random
+    rng = random.Random(2026)
+    meshes = ["capsule_lo", "monkey2", "torus_lo", "cube", "wuson", "mocap", "spider_shipped",
+              "engine_shipped", "duck", "human", "cubes", "suzanne_shipped", "axe", "letters",
+              "teapots", "c4d"]
+    def tangent(n, size):
+        n = mathutils.Vector(n); t = n.cross(mathutils.Vector((0.3, 0.5, 0.8)).normalized())
+        return tuple(size * t.normalized())
+    def drawn_detail(k):
+        kind = rng.choice(["detail", "along", "pinch", "tinygrab", "swirl"])
+        side = rng.choice(["+x", "-x", "+y", "-y", "+z", "-z"])
+        r = rng.uniform(0.15, 0.3); seed = 500 + k
+        if kind == "detail": return kind, side, lambda o: detail(o, at(side), r, 0.04, seed)
+        if kind == "along":
+            axis = rng.choice("XYZ"); return kind, side, lambda o: detail_along(o, at(side), r, 0.04, seed, axis)
+        if kind == "pinch": return kind, side, lambda o: pinch(o, at(side), r, 0.6)
+        if kind == "tinygrab": return kind, side, lambda o: tiny_grab(o, at(side), tangent(LM[side][1], 0.03), r)
+        return kind, side, lambda o: local_twist(o, *LM[side], r, math.radians(50))
+    def drawn_coarse(side):
+        kind = rng.choice(["bend", "twist", "taper", "stretch", "cast", "grab", "smooth",
+                           "laplacian", "wave", "bumps"])
+        axis = rng.choice("XYZ"); a = rng.uniform(0.6, 1.4); f = rng.uniform(0.3, 0.7)
+        if kind in ("bend", "twist"): return kind, lambda o: simple(o, kind.upper(), a, axis)
+        if kind in ("taper", "stretch"): return kind, lambda o: simple(o, kind.upper(), f, axis)
+        if kind == "cast": return kind, lambda o: cast(o, f)
+        if kind == "grab":
+            return kind, lambda o: grab(o, at(side, 0.9), at(side, 0.9, (0.08, 0.1, 0.05)), 0.6)
+        if kind == "smooth": return kind, lambda o: smooth(o, at(side), 0.8, 1.0, 20)
+        if kind == "laplacian": return kind, lambda o: laplacian(o, (0, 0, 0), 2.0, f, 10)
+        if kind == "wave": return kind, lambda o: wave(o, 0.05, 0.5)
+        return kind, lambda o: bumps(o, 0.5, 0.1, 600)
+    for k in range(16):
+        mesh = meshes[k]
+        dk, side, dfn = drawn_detail(k)
+        ck, cfn = drawn_coarse(side)
+        case("%s_plus_%s_%s_%d" % (ck, dk, mesh, k), mesh, [dfn, cfn], "stack", details=[0])
 elif which == "held3":
     # regr01.obj, a house of 275 pieces (32 once welded), not welded: every piece subdivided
     # on its own (its walls' large faces get vertices); the grab crushes thin walls, folding
