@@ -109,6 +109,10 @@ class Transport {
   void share_agreements();
   /// moved_: how many listed vertices each diff moves.
   void count_moved();
+  /// Which of the chunk's vertices some diff carries at (carried_here), and the sums their
+  /// turns add to mean_turn.
+  void chunk_mean_turns(std::size_t begin, std::size_t end, double* sums);
+  void finish_mean_turns(std::size_t chunks);
   /// The carrying energies of the chunk's vertices, and each one's carrying levels.
   void chunk_energy(std::size_t begin, std::size_t end, double* energy);
   void finish_weights(std::size_t chunks);
@@ -561,18 +565,61 @@ double stretch_reach(std::size_t moved_i, std::size_t moved_j) {
   return moved_j >= moved_i ? 1.0 : static_cast<double>(moved_j) / static_cast<double>(moved_i);
 }
 
-void Transport::chunk_energy(std::size_t begin, std::size_t end, double* energy) {
-  std::fill(energy, energy + n_ * n_, 0.0);
-  std::array<double, kMaxUsers * kMaxUsers> reach;
-  for (std::size_t i = 0; i < n_; ++i)
-    for (std::size_t j = 0; j < n_; ++j) reach[i * n_ + j] = stretch_reach(moved_[i], moved_[j]);
+/// Sums, for each pair (i, j), of diff i's turns weighted by the length of diff j's
+/// displacement, over the chunk's vertices whose energy E_ij reads them (four doubles per
+/// pair: a quaternion, each aligned to w >= 0); notes carried_here.
+void Transport::chunk_mean_turns(std::size_t begin, std::size_t end, double* sums) {
+  std::fill(sums, sums + 4 * n_ * n_, 0.0);
   VertexState s;
   for (std::size_t at = begin; at < end; ++at) {
     scratch_.carried_here[at] = 0;
     if (!may_carry_by_bits(at)) continue;
     load_turns(at, s);
     scratch_.carried_here[at] = may_carry(s);
+    if (!scratch_.carried_here[at]) continue;
+    load_displacements(at, s);
+    for (std::size_t i = 0; i < n_; ++i) {
+      if (!s.turns[i] && !s.moves[i]) continue;  // as chunk_energy reads them
+      const Quat& q = s.rotation[i];
+      const double sign = q.w < 0 ? -1.0 : 1.0;
+      for (std::size_t j = 0; j < n_; ++j) {
+        if (j == i || !s.moves[j]) continue;
+        double* sum = sums + 4 * (i * n_ + j);
+        const double weight = sign * s.size[j];
+        sum[0] += weight * q.w, sum[1] += weight * q.x, sum[2] += weight * q.y,
+            sum[3] += weight * q.z;
+      }
+    }
+  }
+}
+
+/// mean_turn: the chunks' sums, added in chunk order (fixed bits), normalised; the identity
+/// for a pair with none.
+void Transport::finish_mean_turns(std::size_t chunks) {
+  std::vector<double>& sums = scratch_.chunk_turns;
+  const std::size_t pairs = n_ * n_;
+  for (std::size_t c = 1; c < chunks; ++c)
+    for (std::size_t k = 0; k < 4 * pairs; ++k) sums[k] += sums[c * 4 * pairs + k];
+  scratch_.mean_turn.assign(pairs, Quat{});
+  for (std::size_t k = 0; k < pairs; ++k) {
+    const double* q = sums.data() + 4 * k;
+    const double len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    if (len > 0)
+      scratch_.mean_turn[k] = {static_cast<float>(q[0] / len), static_cast<float>(q[1] / len),
+                               static_cast<float>(q[2] / len), static_cast<float>(q[3] / len)};
+  }
+}
+
+void Transport::chunk_energy(std::size_t begin, std::size_t end, double* energy) {
+  std::fill(energy, energy + n_ * n_, 0.0);
+  std::array<double, kMaxUsers * kMaxUsers> reach;
+  for (std::size_t i = 0; i < n_; ++i)
+    for (std::size_t j = 0; j < n_; ++j) reach[i * n_ + j] = stretch_reach(moved_[i], moved_[j]);
+  const std::vector<Quat>& mean_turn = scratch_.mean_turn;
+  VertexState s;
+  for (std::size_t at = begin; at < end; ++at) {
     if (!scratch_.carried_here[at]) continue;  // its energy terms are zero, its levels unread
+    load_turns(at, s);
     load_displacements(at, s);
     const BaseFrame frame = base_frame(vertices_[at]);
     scratch_.edge[at] = frame.edge;
@@ -587,8 +634,10 @@ void Transport::chunk_energy(std::size_t begin, std::size_t end, double* energy)
       if (!s.turns[i] && !s.moves[i]) continue;
       for (std::size_t j = 0; j < n_; ++j)
         if (j != i && s.moves[j])
-          energy[i * n_ + j] += std::sqrt(norm2(rotation_change(s.rotation[i], s.d[j])) +
-                                          reach[i * n_ + j] * k[i] * norm2(s.d[j]));
+          energy[i * n_ + j] +=
+              std::sqrt(norm2(rotation_change(s.rotation[i] * conjugate(mean_turn[i * n_ + j]),
+                                              s.d[j])) +
+                        reach[i * n_ + j] * k[i] * norm2(s.d[j]));
     }
   }
 }
@@ -977,6 +1026,12 @@ void transport_positions(const Topology& topology, std::span<const Vec3f> base,
   scratch.sole.resize(vertices.size());
   scratch.framed.resize(vertices.size());
   if (scratch.reads_level.size() < base.size()) scratch.reads_level.resize(base.size(), 0);
+  scratch.chunk_turns.resize(chunks * 4 * n * n);
+  std::fill(scratch.chunk_turns.begin(), scratch.chunk_turns.begin() + 4 * n * n, 0.0);
+  pool.for_chunks(vertices.size(), grain, [&](std::size_t begin, std::size_t end) {
+    t.chunk_mean_turns(begin, end, scratch.chunk_turns.data() + (begin / grain) * 4 * n * n);
+  });
+  t.finish_mean_turns(chunks);
   std::fill(scratch.chunk_energy.begin(), scratch.chunk_energy.begin() + n * n, 0.0);
   pool.for_chunks(vertices.size(), grain, [&](std::size_t begin, std::size_t end) {
     t.chunk_energy(begin, end, scratch.chunk_energy.data() + (begin / grain) * n * n);
