@@ -634,10 +634,9 @@ void Transport::chunk_energy(std::size_t begin, std::size_t end, double* energy)
       if (!s.turns[i] && !s.moves[i]) continue;
       for (std::size_t j = 0; j < n_; ++j)
         if (j != i && s.moves[j])
-          energy[i * n_ + j] +=
-              std::sqrt(norm2(rotation_change(s.rotation[i] * conjugate(mean_turn[i * n_ + j]),
-                                              s.d[j])) +
-                        reach[i * n_ + j] * k[i] * norm2(s.d[j]));
+          energy[i * n_ + j] += std::sqrt(
+              norm2(rotation_change(s.rotation[i] * conjugate(mean_turn[i * n_ + j]), s.d[j])) +
+              reach[i * n_ + j] * k[i] * norm2(s.d[j]));
     }
   }
 }
@@ -690,7 +689,8 @@ void Transport::ring_stretches(std::size_t at, const VertexState& s, const Vec3d
     const double inverse = 1 / before;
     for (std::size_t i = 0; i < n_; ++i) {
       if (!s.turns[i] && !s.moves[i]) continue;
-      const double change = relative_change(std::sqrt(norm2(sub(edited_position(i, u), e[i])) * inverse));
+      const double change =
+          relative_change(std::sqrt(norm2(sub(edited_position(i, u), e[i])) * inverse));
       sum[i] += change;
       squares[i] += change * change;
     }

@@ -30,20 +30,21 @@
 //   marks it as the finer edit) relative to M_ij, i's mean turn over j's displacement (the
 //   normalised sum of R_i weighted by |d_j| over the vertices E_ij reads), and k_i, twice
 //   the mean squared relative change of the edges around v under i (its stretch; a pinch or
-//   a small grab hardly turns the surface but squeezes and shears it); the coarser edit changes the finer one's displacement little and the finer
-//   edit's deformation would change the coarser's a lot, so the coarser edit carries the finer
-//   one (for a bump of width w on a bend of radius r the ratio is r / w, the share falls as
-//   its fourth power). The changes add as lengths, not squared lengths, so that the few
-//   vertices an edit spikes (where a smoothing overshoots on a fine patch) weigh as a few
-//   vertices: squared, two spiked vertices of 599 outweighed the rest of the patch and made
-//   a smoothing of a whole figure the finer edit under a swirl on its head. The turn i gives
-//   the whole of j's support alike is a rigid motion of it, which changes j's shape not at
-//   all: only how i's turn varies across j tells i's scale. Whole, it read a bend as fine as
-//   a grab near the bend's origin, where the bend turns the surface by 22 degrees but moves
-//   it little (the grab carried the bend: 0.27 from the frame ideal, `sum` 0.27; now 0.006,
-//   the bend carrying). Edits of one scale (a_ij = 1/2) carry neither: they add, as strokes
-//   one after the other would. Every term is bounded by |(R_i - I) d_j|, so the result is
-//   continuous even where the weights switch.
+//   a small grab hardly turns the surface but squeezes and shears it); the coarser edit
+//   changes the finer one's displacement little and the finer edit's deformation would change
+//   the coarser's a lot, so the coarser edit carries the finer one (for a bump of width w on
+//   a bend of radius r the ratio is r / w, the share falls as its fourth power). The changes
+//   add as lengths, not squared lengths, so that the few vertices an edit spikes (where a
+//   smoothing overshoots on a fine patch) weigh as a few vertices: squared, two spiked
+//   vertices of 599 outweighed the rest of the patch and made a smoothing of a whole figure
+//   the finer edit under a swirl on its head. The turn i gives the whole of j's support alike
+//   is a rigid motion of it, which changes j's shape not at all: only how i's turn varies
+//   across j tells i's scale. Whole, it read a bend as fine as a grab near the bend's origin,
+//   where the bend turns the surface by 22 degrees but moves it little (the grab carried the
+//   bend: 0.27 from the frame ideal, `sum` 0.27; now 0.006, the bend carrying). Edits of one
+//   scale (a_ij = 1/2) carry neither: they add, as strokes one after the other would. Every
+//   term is bounded by |(R_i - I) d_j|, so the result is continuous even where the weights
+//   switch.
 // - s_ij = max(0, 1 - |d_i - d_j| / (0.001 min(|d_i|, |d_j|)))^2 and c_j = sum_k s_jk count
 //   each intent once: identical edits come back once (idempotence), independent ones add, and
 //   two edits moving the same way by similar amounts (two inflates along one normal) are two.
