@@ -43,6 +43,10 @@ constexpr double kSmoothingReach = 0.75;
 /// changed no verdict of any set, and moved the crease test's sessions from 3,794 to 3,801
 /// opposed pairs (strokes of one scale rarely lie wholly inside one four times wider).
 constexpr double kNestedRatio = 4.0;
+/// The listed vertices the mean turns M_ij (frame_transport.h) are read over, about: every
+/// k-th in list order beyond this many. A mean needs no more, and a merge as wide as a
+/// session's (45,000 vertices) read whole paid a second pass over them.
+constexpr std::size_t kMeanTurnSamples = 4096;
 constexpr std::uint32_t kNoSeam = 0xffffffffu;
 constexpr std::uint8_t kNotCached = 0xff;
 
@@ -109,8 +113,7 @@ class Transport {
   void share_agreements();
   /// moved_: how many listed vertices each diff moves.
   void count_moved();
-  /// Which of the chunk's vertices some diff carries at (carried_here), and the sums their
-  /// turns add to mean_turn.
+  /// The sums the chunk's vertices add to mean_turn.
   void chunk_mean_turns(std::size_t begin, std::size_t end, double* sums);
   void finish_mean_turns(std::size_t chunks);
   /// The carrying energies of the chunk's vertices, and each one's carrying levels.
@@ -169,6 +172,8 @@ class Transport {
   std::array<std::uint8_t, kMaxUsers> cached_{};
   std::size_t carriers_ = 0;
   std::array<std::size_t, kMaxUsers> moved_{};  ///< per diff: the listed vertices it moves
+  /// Every how many listed vertices one is read for the mean turns (kMeanTurnSamples).
+  std::size_t mean_stride_ = 1;
   void fit_grabs(std::span<const bool> carries);
   double same(const VertexState& s, std::size_t i, std::size_t j) const;
 };
@@ -554,6 +559,7 @@ bool Transport::may_carry_by_bits(std::size_t at) const {
 
 void Transport::count_moved() {
   for (std::size_t i = 0; i < n_; ++i) moved_[i] = moved_count(i);
+  mean_stride_ = std::max<std::size_t>(1, vertices_.size() / kMeanTurnSamples);
 }
 
 /// How much of diff i's ring stretching counts against it carrying diff j: all of it where j
@@ -566,17 +572,16 @@ double stretch_reach(std::size_t moved_i, std::size_t moved_j) {
 }
 
 /// Sums, for each pair (i, j), of diff i's turns weighted by the length of diff j's
-/// displacement, over the chunk's vertices whose energy E_ij reads them (four doubles per
-/// pair: a quaternion, each aligned to w >= 0); notes carried_here.
+/// displacement, over the chunk's vertices whose energy E_ij reads them, every
+/// mean_stride_-th in list order (four doubles per pair: a quaternion, each aligned to w >= 0).
 void Transport::chunk_mean_turns(std::size_t begin, std::size_t end, double* sums) {
   std::fill(sums, sums + 4 * n_ * n_, 0.0);
   VertexState s;
-  for (std::size_t at = begin; at < end; ++at) {
-    scratch_.carried_here[at] = 0;
+  for (std::size_t at = begin + (mean_stride_ - begin % mean_stride_) % mean_stride_; at < end;
+       at += mean_stride_) {
     if (!may_carry_by_bits(at)) continue;
     load_turns(at, s);
-    scratch_.carried_here[at] = may_carry(s);
-    if (!scratch_.carried_here[at]) continue;
+    if (!may_carry(s)) continue;
     load_displacements(at, s);
     for (std::size_t i = 0; i < n_; ++i) {
       if (!s.turns[i] && !s.moves[i]) continue;  // as chunk_energy reads them
@@ -618,8 +623,11 @@ void Transport::chunk_energy(std::size_t begin, std::size_t end, double* energy)
   const std::vector<Quat>& mean_turn = scratch_.mean_turn;
   VertexState s;
   for (std::size_t at = begin; at < end; ++at) {
-    if (!scratch_.carried_here[at]) continue;  // its energy terms are zero, its levels unread
+    scratch_.carried_here[at] = 0;
+    if (!may_carry_by_bits(at)) continue;
     load_turns(at, s);
+    scratch_.carried_here[at] = may_carry(s);
+    if (!scratch_.carried_here[at]) continue;  // its energy terms are zero, its levels unread
     load_displacements(at, s);
     const BaseFrame frame = base_frame(vertices_[at]);
     scratch_.edge[at] = frame.edge;

@@ -28,9 +28,10 @@
 //   E_ij = sum_v sqrt(|(R_i M_ij^-1 - I) d_j|^2 + k_i |d_j|^2), the change i's deformation
 //   would make to j's displacement: its whole rotations (with the spin: a small grab's spin
 //   marks it as the finer edit) relative to M_ij, i's mean turn over j's displacement (the
-//   normalised sum of R_i weighted by |d_j| over the vertices E_ij reads), and k_i, twice
-//   the mean squared relative change of the edges around v under i (its stretch; a pinch or
-//   a small grab hardly turns the surface but squeezes and shears it); the coarser edit
+//   normalised sum of R_i weighted by |d_j| over the vertices E_ij reads; in a merge of more
+//   than 4,096 changed vertices, over every k-th in list order, about 4,096 in all), and k_i,
+//   twice the mean squared relative change of the edges around v under i (its stretch; a
+//   pinch or a small grab hardly turns the surface but squeezes and shears it); the coarser edit
 //   changes the finer one's displacement little and the finer edit's deformation would change
 //   the coarser's a lot, so the coarser edit carries the finer one (for a bump of width w on
 //   a bend of radius r the ratio is r / w, the share falls as its fourth power). The changes
