@@ -47,6 +47,9 @@ constexpr double kNestedRatio = 4.0;
 /// k-th in list order beyond this many. A mean needs no more, and a merge as wide as a
 /// session's (45,000 vertices) read whole paid a second pass over them.
 constexpr std::size_t kMeanTurnSamples = 4096;
+/// The blocks of the list the mean turns are summed in, at most (each summed on one thread,
+/// the blocks then added in order: the same bits for any thread count).
+constexpr std::size_t kMeanTurnBlocks = 64;
 constexpr std::uint32_t kNoSeam = 0xffffffffu;
 constexpr std::uint8_t kNotCached = 0xff;
 
@@ -598,7 +601,7 @@ void Transport::chunk_mean_turns(std::size_t begin, std::size_t end, double* sum
   }
 }
 
-/// mean_turn: the chunks' sums, added in chunk order (fixed bits), normalised; the identity
+/// mean_turn: the blocks' sums, added in block order (fixed bits), normalised; the identity
 /// for a pair with none.
 void Transport::finish_mean_turns(std::size_t chunks) {
   std::vector<double>& sums = scratch_.chunk_turns;
@@ -1034,12 +1037,17 @@ void transport_positions(const Topology& topology, std::span<const Vec3f> base,
   scratch.sole.resize(vertices.size());
   scratch.framed.resize(vertices.size());
   if (scratch.reads_level.size() < base.size()) scratch.reads_level.resize(base.size(), 0);
-  scratch.chunk_turns.resize(chunks * 4 * n * n);
+  // The mean turns' sums in at most kMeanTurnBlocks blocks of the list (four doubles per pair
+  // and block: per chunk of `grain`, 64 diffs over a million vertices would take 260 MB).
+  const std::size_t block =
+      std::max(grain, (vertices.size() + kMeanTurnBlocks - 1) / kMeanTurnBlocks);
+  const std::size_t blocks = std::max<std::size_t>(1, (vertices.size() + block - 1) / block);
+  scratch.chunk_turns.resize(blocks * 4 * n * n);
   std::fill(scratch.chunk_turns.begin(), scratch.chunk_turns.begin() + 4 * n * n, 0.0);
-  pool.for_chunks(vertices.size(), grain, [&](std::size_t begin, std::size_t end) {
-    t.chunk_mean_turns(begin, end, scratch.chunk_turns.data() + (begin / grain) * 4 * n * n);
+  pool.for_chunks(vertices.size(), block, [&](std::size_t begin, std::size_t end) {
+    t.chunk_mean_turns(begin, end, scratch.chunk_turns.data() + (begin / block) * 4 * n * n);
   });
-  t.finish_mean_turns(chunks);
+  t.finish_mean_turns(blocks);
   std::fill(scratch.chunk_energy.begin(), scratch.chunk_energy.begin() + n * n, 0.0);
   pool.for_chunks(vertices.size(), grain, [&](std::size_t begin, std::size_t end) {
     t.chunk_energy(begin, end, scratch.chunk_energy.data() + (begin / grain) * n * n);

@@ -120,7 +120,7 @@ struct TransportInput {
 /// Scratch reused across merges (no allocation once warm).
 struct TransportScratch {
   std::vector<double> chunk_energy;    ///< per chunk, users x users sums E_ij (above)
-  std::vector<double> chunk_turns;     ///< per chunk, users x users sums of R_i over d_j
+  std::vector<double> chunk_turns;     ///< per block, users x users sums of R_i over d_j
   std::vector<Quat> mean_turn;         ///< users x users: M_ij (above)
   std::vector<double> weight;          ///< users x users: w_ij
   std::vector<Quat> seam_rotation;     ///< per seam group and diff: the shared rotation
