@@ -118,7 +118,7 @@ class Transport {
   void count_moved();
   /// The sums the chunk's vertices add to mean_turn.
   void chunk_mean_turns(std::size_t begin, std::size_t end, double* sums);
-  void finish_mean_turns(std::size_t chunks);
+  void finish_mean_turns(std::size_t blocks);
   /// The carrying energies of the chunk's vertices, and each one's carrying levels.
   void chunk_energy(std::size_t begin, std::size_t end, double* energy);
   void finish_weights(std::size_t chunks);
@@ -129,8 +129,8 @@ class Transport {
   bool contains(std::size_t i, std::size_t j) const;
   bool overlaps(std::size_t i, std::size_t j) const;
   void carry_wholly(std::size_t i, std::size_t j);
-  void carry_nested(std::span<const std::size_t> moved);
-  void carry_inside_smoothings(std::span<const std::size_t> moved);
+  void carry_nested();
+  void carry_inside_smoothings();
   void cache_face_turns(std::span<const bool> carries, WorkerPool& pool, std::size_t grain);
   /// The merged position of the listed vertex `at`; `s` is scratch (its arrays are sized for
   /// the most users, so it is made once per chunk, not per vertex).
@@ -560,6 +560,13 @@ bool Transport::may_carry_by_bits(std::size_t at) const {
   return carries_between(movers, turners, both);
 }
 
+/// Adds the `chunks` runs of `width` sums in `sums` into the first, in chunk order: the same
+/// bits whichever threads summed the chunks.
+void add_chunks_in_order(std::vector<double>& sums, std::size_t chunks, std::size_t width) {
+  for (std::size_t c = 1; c < chunks; ++c)
+    for (std::size_t k = 0; k < width; ++k) sums[k] += sums[c * width + k];
+}
+
 void Transport::count_moved() {
   for (std::size_t i = 0; i < n_; ++i) moved_[i] = moved_count(i);
   mean_stride_ = std::max<std::size_t>(1, vertices_.size() / kMeanTurnSamples);
@@ -601,13 +608,12 @@ void Transport::chunk_mean_turns(std::size_t begin, std::size_t end, double* sum
   }
 }
 
-/// mean_turn: the blocks' sums, added in block order (fixed bits), normalised; the identity
-/// for a pair with none.
-void Transport::finish_mean_turns(std::size_t chunks) {
+/// mean_turn: the blocks' sums, added in block order, normalised; the identity for a pair
+/// with none.
+void Transport::finish_mean_turns(std::size_t blocks) {
   std::vector<double>& sums = scratch_.chunk_turns;
   const std::size_t pairs = n_ * n_;
-  for (std::size_t c = 1; c < chunks; ++c)
-    for (std::size_t k = 0; k < 4 * pairs; ++k) sums[k] += sums[c * 4 * pairs + k];
+  add_chunks_in_order(sums, blocks, 4 * pairs);
   scratch_.mean_turn.assign(pairs, Quat{});
   for (std::size_t k = 0; k < pairs; ++k) {
     const double* q = sums.data() + 4 * k;
@@ -664,8 +670,8 @@ double sideways(const Vec3d& d, const Vec3d& n, double edge) {
 /// An edge's change of length, from its ratio r of lengths after to before, relative to the
 /// mean of the two lengths: r - 1 for small changes, but bounded by 2. A smoothing spikes a few
 /// vertices of a fine patch (Blender's Laplacian smooth at factor 0.1 sent two vertices of the
-/// human figure's head twelve edges out, and their ring edges grew elevenfold); unbounded,
-/// those eight edges of 1,700 made the whole of the smoothing's stretch over the head.
+/// human figure's head about twelve edges out); unbounded, the few edges around them made
+/// nearly all of the smoothing's stretch over the head.
 double relative_change(double r) {
   return 2 * (r - 1) / (r + 1);
 }
@@ -753,9 +759,8 @@ bool Transport::smooths(std::size_t i, std::size_t moved) const {
 /// Where one edit lies inside a much wider one, or inside a smoothing, the outer one carries it
 /// (w = 1, and 0 back), whatever the energies say: see kNestedRatio and kSmoothingRatio.
 void Transport::carry_inside() {
-  const std::span<const std::size_t> counts(moved_.data(), n_);
-  carry_nested(counts);
-  carry_inside_smoothings(counts);
+  carry_nested();
+  carry_inside_smoothings();
 }
 
 /// Whether every vertex diff j moves, diff i moves too.
@@ -780,7 +785,8 @@ void Transport::carry_wholly(std::size_t i, std::size_t j) {
 
 /// Each edit carries the overlapping edits that lie wholly inside it and move at most
 /// 1 / kNestedRatio of the vertices it moves.
-void Transport::carry_nested(std::span<const std::size_t> moved) {
+void Transport::carry_nested() {
+  const std::array<std::size_t, kMaxUsers>& moved = moved_;
   for (std::size_t i = 0; i < n_; ++i)
     for (std::size_t j = 0; j < n_; ++j) {
       const bool small =
@@ -791,7 +797,8 @@ void Transport::carry_nested(std::span<const std::size_t> moved) {
 
 /// A smoothing carries every edit it overlaps that moves at most kSmoothingReach of the
 /// vertices it moves.
-void Transport::carry_inside_smoothings(std::span<const std::size_t> moved) {
+void Transport::carry_inside_smoothings() {
+  const std::array<std::size_t, kMaxUsers>& moved = moved_;
   auto inside = [&](std::size_t i, std::size_t j) {
     return overlaps(i, j) &&
            static_cast<double>(moved[j]) <= kSmoothingReach * static_cast<double>(moved[i]);
@@ -820,8 +827,7 @@ void Transport::finish_weights(std::size_t chunks) {
   auto& w = scratch_.weight;
   w.assign(n_ * n_, 0.0);
   std::vector<double>& e = scratch_.chunk_energy;
-  for (std::size_t c = 1; c < chunks; ++c)  // chunk sums in chunk order: fixed bits
-    for (std::size_t k = 0; k < n_ * n_; ++k) e[k] += e[c * n_ * n_ + k];
+  add_chunks_in_order(e, chunks, n_ * n_);
   for (std::size_t i = 0; i < n_; ++i)
     for (std::size_t j = 0; j < n_; ++j) {
       if (i == j) continue;

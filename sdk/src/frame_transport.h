@@ -41,8 +41,8 @@
 //   the finer edit under a swirl on its head. The turn i gives the whole of j's support alike
 //   is a rigid motion of it, which changes j's shape not at all: only how i's turn varies
 //   across j tells i's scale. Whole, it read a bend as fine as a grab near the bend's origin,
-//   where the bend turns the surface by 22 degrees but moves it little (the grab carried the
-//   bend: 0.27 from the frame ideal, `sum` 0.27; now 0.006, the bend carrying). Edits of one
+//   where the bend turns the surface by tens of degrees but moves it little (the grab carried
+//   the bend: 0.27 from the frame ideal, `sum` 0.27; now 0.006, the bend carrying). Edits of one
 //   scale (a_ij = 1/2) carry neither: they add, as strokes one after the other would. Every
 //   term is bounded by |(R_i - I) d_j|, so the result is continuous even where the weights
 //   switch.
